@@ -1,0 +1,95 @@
+"""Everything the analytic model derives from a scene, once: per-direction dynamics, uplift
+thresholds lambda (Eq. 20), coefficients of restitution eta, fall, fracture and critical angles.
+
+Part of the physics library (pure functions of the scene); engines may use it to measure
+themselves (critical angles, energies), the analytic solver uses it to integrate.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..scene.scene import Scene
+from .dynamics import Dynamics
+from .impact import eta as eta_of
+
+__all__ = ["Reference"]
+
+
+class Reference:
+    """Everything the analytic model derives from a scene: per-direction dynamics, thresholds,
+    restitution, fall, fracture and critical angles. Shared by :func:`simulate` and ``info``."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        st = scene.structure
+        dev = scene.devices if scene.has_devices else None
+        self.dyn = {s: Dynamics(st, s, dev) for s in (1, -1)}
+        self.lam = {s: self.dyn[s].uplift_threshold() for s in (1, -1)}
+        self.eta = {s: eta_of(st, s) for s in (1, -1)}
+        self.fall = dict(scene.fall_angles)
+        self.alpha = st.alpha
+        self.p = st.p
+        eps = dev.fracture_strain if dev is not None else None
+        self.fracture_angle = {s: (self._fracture_angle(s, eps) if eps is not None else math.inf)
+                               for s in (1, -1)}
+        self.critical = {(s, intact): self._critical_angle(s, intact)
+                         for s in (1, -1) for intact in (True, False)}
+
+    # --- derived angles -------------------------------------------------------------------
+    def strain(self, phi: float) -> float:
+        """Largest tendon strain [-] at rotation phi (geometric, whatever k is)."""
+        s = 1 if phi >= 0 else -1
+        ds = self.dyn[s].device_state(self.dyn[s].configuration(phi))
+        return max(ds.elong_left, ds.elong_right) / self.scene.devices.tendon_length
+
+    def _fracture_angle(self, s: int, eps: float) -> float:
+        lim = self.fall[s]
+        f = lambda x: self.strain(s * x) - eps  # noqa: E731
+        if f(lim) < 0:
+            return math.inf
+        return brentq(f, 0.0, lim, xtol=1e-14, rtol=1e-13)
+
+    def _critical_angle(self, s: int, intact: bool) -> float:
+        """First |phi| > 0 where dV/dphi vanishes (gravity + intact tendons), inf if none before
+        the fall angle."""
+        dyn, lim = self.dyn[s], self.fall[s]
+        f = lambda x: s * dyn.potential_gradient(s * x, intact)  # noqa: E731
+        xs = np.linspace(0.0, lim, 400)[1:]
+        prev_x, prev = 0.0, f(0.0)
+        for x in xs:
+            v = f(x)
+            if prev > 0 >= v:
+                return brentq(f, prev_x, x, xtol=1e-14, rtol=1e-13)
+            prev_x, prev = x, v
+        return math.inf
+
+    def constants(self) -> dict[str, Any]:
+        """The constants table (JSON keys of ``rockbench info``)."""
+        nan_if_inf = lambda v: (None if not math.isfinite(v) else v)  # noqa: E731
+        st = self.scene.structure
+        out = {"scene": self.scene.name, "type": st.kind, "alpha": self.alpha, "p": self.p,
+               "eta_ccw": self.eta[1], "eta_cw": self.eta[-1],
+               "lambda_ccw": self.lam[1], "lambda_cw": self.lam[-1],
+               "phi_cr_ccw": nan_if_inf(self.critical[(1, True)]),
+               "phi_cr_cw": nan_if_inf(-self.critical[(-1, True)]),
+               "phi_fall_ccw": self.fall[1], "phi_fall_cw": -self.fall[-1]}
+        if self.scene.has_devices:
+            out["phi_cr_ccw_fractured"] = nan_if_inf(self.critical[(1, False)])
+            out["phi_cr_cw_fractured"] = nan_if_inf(-self.critical[(-1, False)])
+            out["phi_fracture_ccw"] = nan_if_inf(self.fracture_angle[1])
+            out["phi_fracture_cw"] = nan_if_inf(-self.fracture_angle[-1])
+        if st.kind == "frame":
+            out.update(mass_left=st.mass_left, mass_right=st.mass_right, mass_beam=st.mass_beam,
+                       alpha_right=st.alpha1)
+            for s, tag in ((1, "ccw"), (-1, "cw")):
+                r, psi = st.beam_offset(s)
+                out[f"r_BC_{tag}"] = r
+                out[f"psi_BC_{tag}"] = psi
+        else:
+            out["mass"] = st.mass
+        return out

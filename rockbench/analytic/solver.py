@@ -1,0 +1,347 @@
+"""Event-driven integration of the SDOF rocking model (the analytic reference backend).
+
+The state is (phi, phi') with a discrete mode: at rest (0) or rocking counterclockwise (+1) or
+clockwise (-1), and whether the devices are intact. Between events, Eq. 17 of the mechanism of
+the current mode is integrated with ``scipy.integrate.solve_ivp`` (an explicit Runge-Kutta method
+of order 8, DOP853, with tight tolerances) and these events:
+
+* uplift (from rest): the ground acceleration crosses lambda_ccw g upwards or lambda_cw g
+  downwards (Eq. 20), found by sign change on the motion's knots and Brent's method;
+* impact: phi returns to 0; phi'+ = eta phi'-, with eta of the mechanism the structure rocks into
+  after the impact (:mod:`rockbench.analytic.impact`). A post-impact |phi'| below the rest
+  threshold ends the rocking (the structure is at rest; it may uplift again at once);
+* fracture: a tendon's strain reaches eps_f; tendons and dampers are removed for the rest of the run;
+* overturn: |phi| reaches the scene's fall angle (terminal);
+* critical (recorded only): |phi| exceeds the critical angle of the current potential;
+* peak (recorded only): phi' = 0 while rocking, i.e. a local extremum of phi.
+
+A run ends at ``t_end`` or, earlier, once the structure is at rest and the ground motion can no
+longer uplift it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from ..constants import G
+from ..errors import ParameterError, check_positive
+from ..result import HISTORY_COLUMNS, CONTACT_COLUMNS, Cost, Result, Summary, events_frame
+from ..scene.scene import Scene
+from .reference import Reference
+
+__all__ = ["AnalyticSettings", "simulate"]
+
+
+@dataclass(frozen=True)
+class AnalyticSettings:
+    """Settings of the analytic backend.
+
+    rtol, atol : relative and absolute tolerances of solve_ivp (atol in rad and rad/s).
+    method : an explicit solve_ivp method ("DOP853" default, "RK45", "Radau" ... ).
+    output_dt : interval [s] of the history samples (independent of the integrator's steps).
+    rest_ratio : a post-impact |phi'| below rest_ratio * p * alpha [rad/s] ends rocking.
+    history : "full" (every column) or "minimal" (t, phi, phidot, ground_acc, mode,
+        devices_intact; other columns NaN) - minimal is faster for sweeps.
+    """
+
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    method: str = "DOP853"
+    output_dt: float = 1e-3
+    rest_ratio: float = 1e-4
+    history: str = "full"
+
+    def __post_init__(self) -> None:
+        for name in ("rtol", "atol", "output_dt", "rest_ratio"):
+            check_positive(name, getattr(self, name))
+        if self.history not in ("full", "minimal"):
+            raise ParameterError("history", self.history, "'full' or 'minimal'")
+        if self.method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
+            raise ParameterError("method", self.method,
+                                 "one of DOP853, RK45, RK23, Radau, BDF, LSODA")
+
+
+class _Zero:
+    """Ground motion of a free-rocking run."""
+
+    t_start = 0.0
+    t_end = 0.0
+    peak = 0.0
+
+    def acceleration(self, t):
+        return np.zeros_like(t) if isinstance(t, np.ndarray) else 0.0
+
+    def knots(self, t0, t1):
+        return np.array([t0, t1])
+
+    def max_abs_after(self, t):
+        return 0.0
+
+    def describe(self):
+        return {"kind": "none"}
+
+
+def _event(fun, direction: float, terminal: bool):
+    fun.direction = direction
+    fun.terminal = terminal
+    return fun
+
+
+def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: float = 0.0,
+             phidot0: float = 0.0, settings: AnalyticSettings | None = None,
+             reference: Reference | None = None) -> Result:
+    """Run the analytic SDOF model of ``scene`` under ``motion``.
+
+    Parameters
+    ----------
+    scene : Scene
+    motion : GroundMotion or None
+        None for free rocking (then ``phi0`` must be non-zero).
+    duration : float, optional
+        Simulated time [s] from the motion's start (``t_start``; -3 T_g for a Ricker pulse, 0 for
+        a record or free rocking). Default: until the motion ends plus 10 s.
+    phi0, phidot0 : float
+        Initial rotation [rad] and angular velocity [rad/s] (default: rest).
+    settings : AnalyticSettings
+    reference : Reference, optional
+        Precomputed constants of ``scene`` (saves their set-up in sweeps).
+    """
+    settings = settings or AnalyticSettings()
+    ref = reference if reference is not None and reference.scene == scene else Reference(scene)
+    mot = motion if motion is not None else _Zero()
+    t0 = float(mot.t_start)
+    if duration is None:
+        duration = max(mot.t_end - t0, 0.0) + 10.0
+    duration = check_positive("duration", duration)
+    phi0 = float(phi0)
+    phidot0 = float(phidot0)
+    for name, v in (("phi0", phi0), ("phidot0", phidot0)):
+        if not math.isfinite(v):
+            raise ParameterError(name, v, "a finite number")
+    if abs(phi0) >= min(ref.fall.values()):
+        raise ParameterError("phi0", phi0, f"|phi0| < fall angle {min(ref.fall.values()):.4g} rad")
+    if motion is None and phi0 == 0.0 and phidot0 == 0.0:
+        raise ParameterError("phi0", phi0, "non-zero for a free-rocking run (no ground motion)")
+    t_end = t0 + duration
+
+    acc = mot.acceleration
+    v_rest = settings.rest_ratio * ref.p * ref.alpha
+    lam_p, lam_n = ref.lam[1] * G, ref.lam[-1] * G
+    intact = scene.has_devices
+
+    segments: list[tuple[float, float, Any, int, bool]] = []
+    rows: list[dict[str, Any]] = []
+    steps = nfev = 0
+    overturned = False
+    t_over = t_frac = None
+    fractured = False
+    exceeded = False
+    max_abs = abs(phi0)
+
+    def uplift_direction(t: float) -> int:
+        a = float(acc(t))
+        return 1 if a > lam_p else (-1 if a < lam_n else 0)
+
+    def next_uplift(ta: float, tb: float) -> tuple[float | None, int]:
+        s = uplift_direction(ta)
+        if s:
+            return ta, s
+        ks = mot.knots(ta, tb)
+        a = np.asarray(acc(ks), dtype=float)
+        hit = np.nonzero((a > lam_p) | (a < lam_n))[0]
+        if hit.size == 0:
+            return None, 0
+        i = int(hit[0])
+        s = 1 if a[i] > lam_p else -1
+        thr = lam_p if s == 1 else lam_n
+        lo, hi = float(ks[i - 1]), float(ks[i])
+        tu = brentq(lambda tt: float(acc(tt)) - thr, lo, hi, xtol=1e-13, rtol=1e-14)
+        # step just past the root so the threshold is strictly exceeded
+        while uplift_direction(tu) != s and tu < hi:
+            tu = min(hi, tu + 1e-12 * max(1.0, abs(tu)))
+        return tu, s
+
+    if phi0 != 0.0:
+        mode = 1 if phi0 > 0 else -1
+    elif phidot0 != 0.0:
+        mode = 1 if phidot0 > 0 else -1
+    else:
+        mode = 0
+    t, phi, phid = t0, phi0, phidot0
+
+    wall0 = time.perf_counter()
+    guard = 0
+    while t < t_end and not overturned:
+        guard += 1
+        if guard > 200_000:
+            raise RuntimeError("analytic solver made no progress (event loop did not advance)")
+        if mode == 0:
+            tu, s = next_uplift(t, t_end)
+            if tu is None:
+                quiet = mot.max_abs_after(t) <= min(lam_p, -lam_n)
+                t_stop = t if quiet else t_end
+                segments.append((t, max(t_stop, t), None, 0, intact))
+                if quiet:
+                    t_end = t
+                t = t_end
+                break
+            segments.append((t, tu, None, 0, intact))
+            rows.append(dict(t=tu, kind="uplift", phi=0.0, phidot_before=0.0, phidot_after=0.0,
+                             eta=math.nan, direction=s))
+            t, phi, phid, mode = tu, 0.0, 0.0, s
+            continue
+
+        s = mode
+        dyn_s = ref.dyn[s]
+        flag = intact
+
+        def rhs(tt, y, dyn=dyn_s, flag=flag):
+            return (y[1], dyn.acceleration(y[0], y[1], float(acc(tt)), flag))
+
+        evs = [_event(lambda tt, y: y[0], -s, True),
+               _event(lambda tt, y, s=s: s * y[0] - ref.fall[s], 1, True)]
+        names = ["impact", "overturn"]
+        if intact and math.isfinite(ref.fracture_angle[s]):
+            evs.append(_event(lambda tt, y, s=s: s * y[0] - ref.fracture_angle[s], 1, True))
+            names.append("fracture")
+        crit = ref.critical[(s, intact)]
+        if math.isfinite(crit):
+            evs.append(_event(lambda tt, y, s=s, c=crit: s * y[0] - c, 1, False))
+            names.append("critical")
+        evs.append(_event(lambda tt, y: y[1], -s, False))
+        names.append("peak")
+
+        sol = solve_ivp(rhs, (t, t_end), (phi, phid), method=settings.method,
+                        rtol=settings.rtol, atol=settings.atol, events=evs, dense_output=True)
+        steps += max(len(sol.t) - 1, 0)
+        nfev += sol.nfev
+        if sol.status < 0:
+            raise RuntimeError(f"solve_ivp failed at t={sol.t[-1]:.6g}: {sol.message}")
+        t1 = float(sol.t[-1])
+        y1 = sol.y[:, -1]
+        max_abs = max(max_abs, float(np.max(np.abs(sol.y[0]))))
+        for name, te, ye in zip(names, sol.t_events, sol.y_events):
+            if name not in ("peak", "critical"):
+                continue
+            for tt, yy in zip(te, ye):
+                if name == "peak":
+                    max_abs = max(max_abs, abs(float(yy[0])))
+                else:
+                    exceeded = True
+                rows.append(dict(t=float(tt), kind=name, phi=float(yy[0]),
+                                 phidot_before=float(yy[1]), phidot_after=float(yy[1]),
+                                 eta=math.nan, direction=s))
+        segments.append((t, t1, sol.sol, s, intact))
+        t, phi, phid = t1, float(y1[0]), float(y1[1])
+        if sol.status != 1:      # reached t_end
+            break
+        fired = [n for n, te in zip(names, sol.t_events) if n not in ("peak", "critical")
+                 and len(te) and te[-1] == sol.t[-1]]
+        kind = fired[0] if fired else "impact"
+        if kind == "impact":
+            phi = 0.0
+            post = -s
+            e = ref.eta[post]
+            after = e * phid
+            new_mode = post if abs(after) > v_rest else 0
+            rows.append(dict(t=t, kind="impact", phi=0.0, phidot_before=phid, phidot_after=after,
+                             eta=e, direction=new_mode))
+            if new_mode == 0:
+                after = 0.0
+                rows.append(dict(t=t, kind="rest", phi=0.0, phidot_before=phid * e,
+                                 phidot_after=0.0, eta=math.nan, direction=0))
+            phid, mode = after, new_mode
+        elif kind == "overturn":
+            overturned, t_over = True, t
+            rows.append(dict(t=t, kind="overturn", phi=phi, phidot_before=phid,
+                             phidot_after=phid, eta=math.nan, direction=s))
+        elif kind == "fracture":
+            intact, fractured, t_frac = False, True, t
+            rows.append(dict(t=t, kind="fracture", phi=phi, phidot_before=phid,
+                             phidot_after=phid, eta=math.nan, direction=s))
+    wall = time.perf_counter() - wall0
+
+    if overturned or not segments:
+        t_end = t
+    history = _history(ref, mot, segments, t0, t_end, settings)
+    events = events_frame(sorted(rows, key=lambda r: r["t"]))
+    ups = events[events["kind"] == "uplift"]
+    n_imp = int((events["kind"] == "impact").sum())
+    uplifted = bool(len(ups)) or phi0 != 0.0 or phidot0 != 0.0
+    summary = Summary(
+        max_abs_phi=max_abs, max_abs_phi_over_alpha=max_abs / ref.alpha, overturned=overturned,
+        t_overturn=t_over, exceeded_critical=exceeded or overturned, uplifted=uplifted,
+        t_uplift=float(ups["t"].iloc[0]) if len(ups) else (t0 if uplifted else None),
+        n_impacts=n_imp, fractured=fractured, t_fracture=t_frac)
+    cost = Cost(wall_s=wall, sim_time=t_end - t0, steps=steps, rhs_calls=nfev)
+    return Result(backend="analytic", scene=scene, motion=mot.describe(), history=history,
+                  events=events, summary=summary, cost=cost, settings=asdict(settings))
+
+
+def _history(ref: Reference, mot, segments, t0: float, t_end: float,
+             settings: AnalyticSettings) -> pd.DataFrame:
+    """Sample the piecewise solution on the uniform output grid."""
+    dt = settings.output_dt
+    n = int(math.floor((t_end - t0) / dt + 1e-9)) + 1
+    tg = t0 + dt * np.arange(n)
+    if tg[-1] < t_end - 1e-12:
+        tg = np.append(tg, t_end)
+    phi = np.zeros_like(tg)
+    phid = np.zeros_like(tg)
+    mode = np.zeros(tg.size, dtype=np.int64)
+    intact = np.zeros(tg.size, dtype=bool)
+    for ta, tb, sol, s, ok in segments:
+        i0 = int(np.searchsorted(tg, ta, side="left"))
+        i1 = int(np.searchsorted(tg, tb, side="right"))
+        if i1 <= i0:
+            continue
+        sl = slice(i0, i1)
+        intact[sl] = ok
+        mode[sl] = s
+        if sol is not None:
+            y = sol(tg[sl])
+            phi[sl], phid[sl] = y[0], y[1]
+    if segments and segments[-1][3] == 0:
+        pass
+    cols: dict[str, Any] = {"t": tg, "phi": phi, "phidot": phid,
+                            "ground_acc": np.asarray(mot.acceleration(tg), dtype=float),
+                            "mode": mode, "devices_intact": intact}
+    nan = np.full(tg.size, np.nan)
+    st = ref.scene.structure
+    full = settings.history == "full"
+    if st.kind == "frame" and full:
+        thb, thr = np.zeros_like(tg), np.zeros_like(tg)
+        el, er, dl, dr = (np.zeros_like(tg) for _ in range(4))
+        for i in np.nonzero(mode)[0]:
+            dyn = ref.dyn[int(mode[i])]
+            cfg = dyn.configuration(float(phi[i]))
+            thb[i], thr[i] = cfg.bodies[1].theta, cfg.bodies[2].theta
+            ds = dyn.device_state(cfg)
+            el[i], er[i], dl[i], dr[i] = (ds.elong_left, ds.elong_right,
+                                          ds.dchord_left * phid[i], ds.dchord_right * phid[i])
+        cols.update(theta_beam=thb, theta_right=thr)
+        dev = ref.scene.devices if ref.scene.has_devices else None
+        k = dev.tendon_stiffness if dev else 0.0
+        c = dev.damping if dev else 0.0
+        cols.update(tendon_elong_left=np.where(intact, el, 0.0) if dev else np.zeros_like(tg),
+                    tendon_elong_right=np.where(intact, er, 0.0) if dev else np.zeros_like(tg),
+                    tendon_force_left=np.where(intact, k * el, 0.0),
+                    tendon_force_right=np.where(intact, k * er, 0.0),
+                    damper_force_left=np.where(intact, c * dl, 0.0),
+                    damper_force_right=np.where(intact, c * dr, 0.0))
+    else:
+        for c in ("theta_beam", "theta_right", "tendon_elong_left", "tendon_elong_right",
+                  "tendon_force_left", "tendon_force_right", "damper_force_left",
+                  "damper_force_right"):
+            cols[c] = nan if (st.kind == "frame" or c.startswith("theta")) else np.zeros_like(tg)
+    for c in CONTACT_COLUMNS:
+        cols[c] = nan
+    return pd.DataFrame(cols, columns=list(HISTORY_COLUMNS) + list(CONTACT_COLUMNS))

@@ -1,0 +1,9 @@
+"""Physical constants used everywhere (SI units)."""
+
+#: Acceleration of gravity [m/s^2]. Used by every backend and by the dimensionless axes
+#: a_g / (g tan alpha). Record files in units of g are converted with :data:`G_STANDARD`.
+G = 9.81
+
+#: Standard gravity [m/s^2], used only to convert accelerograms given in units of g
+#: (PEER AT2 files), so that PGAs match the values the data providers publish.
+G_STANDARD = 9.80665

@@ -1,0 +1,32 @@
+"""The analytic SDOF reference as a backend (see :mod:`rockbench.analytic.solver`)."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import scipy
+
+from ..analytic.reference import Reference
+from ..analytic.solver import AnalyticSettings, simulate
+from ..result import Result
+from .base import Backend, run_window
+
+__all__ = ["AnalyticBackend"]
+
+
+class AnalyticBackend(Backend):
+    """Event-driven integration of the paper's equation of motion (the reference)."""
+
+    name: ClassVar[str] = "analytic"
+    Settings: ClassVar[type] = AnalyticSettings
+
+    @classmethod
+    def available(cls) -> tuple[bool, str]:
+        return True, f"scipy {scipy.__version__}"
+
+    def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
+        t0, t_end = run_window(self.scene, motion, duration, phi0)
+        if not hasattr(self, "_ref"):
+            self._ref = Reference(self.scene)
+        return simulate(self.scene, motion, duration=t_end - t0, phi0=phi0,
+                        settings=self.settings, reference=self._ref)

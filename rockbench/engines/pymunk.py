@@ -1,0 +1,103 @@
+"""pymunk (Chipmunk 2-D) backend: the planar engine.
+
+Each body of the scene is one ``pymunk.Body`` with its true mass and moment of inertia and one
+box ``Poly``; the foundation (ground segment and step box) is static. Device forces come from
+the shared machinery (:class:`rockbench.engines.base.DeviceGeometry`), applied at points every
+step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..constants import G
+from ..errors import ParameterError
+from .base import EngineBackend, EngineSettings, PointForce
+
+__all__ = ["PymunkBackend", "PymunkSettings"]
+
+
+@dataclass(frozen=True)
+class PymunkSettings(EngineSettings):
+    """pymunk settings (see ``docs/engines/pymunk.md`` for the measurements behind them).
+
+    iterations : solver iterations per step (pymunk default 10).
+    collision_slop : allowed overlap [m] before position correction (pymunk's default 0.1 is
+        meant for pixels; 1e-4 m here).
+    collision_bias : fraction of overlap left uncorrected after 1 s (pymunk default (1-0.1)^60).
+    """
+
+    iterations: int = 10
+    collision_slop: float = 1e-4
+    collision_bias: float = (1.0 - 0.1) ** 60
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if int(self.iterations) != self.iterations or self.iterations < 1:
+            raise ParameterError("iterations", self.iterations, "an integer >= 1")
+        if not (0.0 <= self.collision_slop < 0.01):
+            raise ParameterError("collision_slop", self.collision_slop, "in [0, 0.01) m")
+        if not (0.0 <= self.collision_bias < 1.0):
+            raise ParameterError("collision_bias", self.collision_bias, "in [0, 1)")
+
+
+class PymunkBackend(EngineBackend):
+    """The scene in pymunk (planar rigid bodies, box contacts)."""
+
+    name: ClassVar[str] = "pymunk"
+    Settings: ClassVar[type] = PymunkSettings
+
+    @classmethod
+    def available(cls) -> tuple[bool, str]:
+        try:
+            import pymunk
+        except Exception as e:  # pragma: no cover - depends on the machine
+            return False, f"pymunk does not import: {e}"
+        return True, f"pymunk {pymunk.version} (Chipmunk {pymunk.chipmunk_version})"
+
+    def _build(self) -> None:
+        import pymunk
+
+        cfg = self.settings
+        space = pymunk.Space()
+        space.iterations = int(cfg.iterations)
+        space.collision_slop = cfg.collision_slop
+        space.collision_bias = cfg.collision_bias
+        space.gravity = (0.0, -G)
+        fd = self.foundation
+        static = space.static_body
+        shapes = [pymunk.Segment(static, (fd.x_min, 0.0), (fd.x_max, 0.0), 0.0)]
+        if fd.step_x0 is not None:
+            x0, x1, hgt = fd.step_x0, fd.step_x1, fd.step_height
+            shapes.append(pymunk.Poly(static, [(x0, 0.0), (x1, 0.0), (x1, hgt), (x0, hgt)]))
+        self._bodies = []
+        for sp, pose in zip(self.specs, self.poses0):
+            body = pymunk.Body(sp.mass, sp.inertia)
+            body.position = (float(pose[0]), float(pose[1]))
+            body.angle = float(pose[2])
+            box = pymunk.Poly.create_box(body, (2 * sp.half_width, 2 * sp.half_height), 0.0)
+            shapes.append(box)
+            space.add(body)
+            self._bodies.append(body)
+        for s in shapes:
+            s.friction = float(np.sqrt(cfg.friction))  # pymunk multiplies the two coefficients
+            s.elasticity = 0.0
+        space.add(*shapes)
+        self._space = space
+
+    def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
+        self._space.gravity = (gravity_x, -G)
+        for f in forces:
+            self._bodies[f.body].apply_force_at_world_point((f.fx, f.fy), (f.px, f.py))
+        self._space.step(self.settings.dt)
+
+    def _state(self) -> np.ndarray:
+        return np.array([[b.position.x, b.position.y, b.angle, b.velocity.x, b.velocity.y,
+                          b.angular_velocity] for b in self._bodies])
+
+    def _close(self) -> None:
+        self._space = None
+        self._bodies = []

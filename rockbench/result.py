@@ -1,0 +1,182 @@
+"""The one result schema every backend fills.
+
+A :class:`Result` holds
+
+* ``history`` - a pandas frame sampled at a fixed output interval, columns :data:`HISTORY_COLUMNS`
+  (engines add :data:`CONTACT_COLUMNS`);
+* ``events`` - a pandas frame, one row per event, columns :data:`EVENT_COLUMNS`;
+* ``summary`` - a :class:`Summary` (peak, verdicts, counts, status);
+* ``cost`` - a :class:`Cost` (wall seconds of the integration or stepping only, steps, calls);
+* the scene, the ground motion description and the backend settings used.
+
+Units: SI and radians throughout (see ``docs/conventions.md``). ``phi`` is the rotation of the
+left (taller) column from rest, positive counterclockwise.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["Result", "Summary", "Cost", "HISTORY_COLUMNS", "CONTACT_COLUMNS", "EVENT_COLUMNS",
+           "EVENT_KINDS", "STATUSES"]
+
+#: History columns and units, in order.
+HISTORY_COLUMNS: dict[str, str] = {
+    "t": "s, time",
+    "phi": "rad, rotation of the left (taller) column from rest, + counterclockwise",
+    "phidot": "rad/s, d(phi)/dt",
+    "ground_acc": "m/s^2, horizontal ground acceleration, + to the right",
+    "theta_beam": "rad, rotation of the beam from rest (NaN for a block)",
+    "theta_right": "rad, rotation of the right column from rest (NaN for a block)",
+    "mode": "-, +1 rocking counterclockwise, -1 clockwise, 0 at rest (engines: sign of phi "
+            "when uplifted)",
+    "devices_intact": "-, True while tendons and dampers are in place",
+    "tendon_elong_left": "m, elongation of the left tendon (0 without tendons)",
+    "tendon_elong_right": "m, elongation of the right tendon",
+    "tendon_force_left": "N, tension in the left tendon",
+    "tendon_force_right": "N, tension in the right tendon",
+    "damper_force_left": "N, force in the left damper (+ resisting opening)",
+    "damper_force_right": "N, force in the right damper",
+}
+
+#: Extra history columns that engine backends fill (NaN for the analytic backend).
+CONTACT_COLUMNS: dict[str, str] = {
+    "penetration": "m, largest penetration at any contact",
+    "sliding": "m, largest tangential slip of any contact point since it was established",
+}
+
+#: Event columns and units.
+EVENT_COLUMNS: dict[str, str] = {
+    "t": "s, time of the event",
+    "kind": "-, one of EVENT_KINDS",
+    "phi": "rad, phi at the event",
+    "phidot_before": "rad/s, angular velocity just before",
+    "phidot_after": "rad/s, angular velocity just after",
+    "eta": "-, coefficient of restitution applied (analytic) or measured (engines); NaN otherwise",
+    "direction": "-, +1/-1 rocking direction after the event (0: at rest)",
+}
+
+EVENT_KINDS = ("uplift", "impact", "peak", "critical", "fracture", "overturn", "rest")
+STATUSES = ("ok", "diverged", "invalid")
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        x = float(x)
+        return x if math.isfinite(x) else None
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+@dataclass
+class Summary:
+    """Scalar outcome of one run (units in the field comments)."""
+
+    max_abs_phi: float                 # rad, max |phi| over the run
+    max_abs_phi_over_alpha: float      # -, max |phi| / alpha (alpha of the taller column)
+    overturned: bool                   # |phi| reached the fall angle
+    t_overturn: float | None           # s
+    exceeded_critical: bool            # |phi| exceeded the critical angle of the current potential
+    uplifted: bool
+    t_uplift: float | None             # s, first uplift
+    n_impacts: int
+    fractured: bool
+    t_fracture: float | None           # s
+    status: str = "ok"                 # ok | diverged | invalid
+    reason: str | None = None          # why a run is not ok
+    eta_measured: list[float] = field(default_factory=list)  # engines: effective eta per impact
+    max_penetration: float | None = None  # m (engines)
+    max_sliding: float | None = None      # m (engines)
+    contact_opened: bool | None = None    # engines: a contact the analytic model keeps closed opened
+
+    def to_dict(self) -> dict[str, Any]:
+        return _jsonable(asdict(self))
+
+
+@dataclass
+class Cost:
+    """What a run cost. ``wall_s`` counts the integration or stepping only, not model building."""
+
+    wall_s: float          # s
+    sim_time: float        # s of simulated time
+    steps: int             # integrator or engine steps
+    rhs_calls: int = 0     # right-hand-side evaluations (analytic)
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall second [-]."""
+        return self.sim_time / self.wall_s if self.wall_s > 0 else math.inf
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["real_time_factor"] = self.real_time_factor
+        return _jsonable(d)
+
+
+@dataclass
+class Result:
+    """Outcome of one backend run. See the module docstring for the schema."""
+
+    backend: str
+    scene: Any
+    motion: dict[str, Any]
+    history: pd.DataFrame
+    events: pd.DataFrame
+    summary: Summary
+    cost: Cost
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def status(self) -> str:
+        return self.summary.status
+
+    @property
+    def ok(self) -> bool:
+        return self.summary.status == "ok"
+
+    def impacts(self) -> pd.DataFrame:
+        """The impact events."""
+        return self.events[self.events["kind"] == "impact"].reset_index(drop=True)
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-safe summary + cost + identification (no history)."""
+        d = {"backend": self.backend, "scene": getattr(self.scene, "name", None)}
+        d.update(self.summary.to_dict())
+        d.update(self.cost.to_dict())
+        d["motion"] = _jsonable(self.motion)
+        d["settings"] = _jsonable(self.settings)
+        return d
+
+    def dumps(self) -> str:
+        return json.dumps(self.to_json(), indent=2)
+
+
+def empty_events() -> pd.DataFrame:
+    """An events frame with the schema's columns and no rows."""
+    return pd.DataFrame({c: pd.Series(dtype="float64") for c in EVENT_COLUMNS}).astype(
+        {"kind": "object", "direction": "int64"})
+
+
+def events_frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
+    """Build an events frame from a list of row dicts (missing fields -> NaN)."""
+    if not rows:
+        return empty_events()
+    df = pd.DataFrame(rows)
+    for c in EVENT_COLUMNS:
+        if c not in df:
+            df[c] = np.nan
+    df["direction"] = df["direction"].fillna(0).astype("int64")
+    return df[list(EVENT_COLUMNS)]

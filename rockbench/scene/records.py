@@ -1,0 +1,184 @@
+"""Loaders for ground-motion record files, returning :class:`rockbench.scene.motion.Record`.
+
+Two formats (see ``shared/records/PROVENANCE.md``):
+
+* PEER AT2 (:func:`load_at2`): a text header whose line with ``NPTS`` and ``DT`` gives the
+  number of samples and the time step [s], followed by the samples in units of g, any number per
+  line. Both the old PEER layout (``NPTS=  4000, DT= .01000 SEC``, text may follow) and the
+  NGA-West2 layout (``  4000   0.0100   NPTS, DT``) are recognised. g is converted with
+  :data:`rockbench.constants.G_STANDARD` so published PGAs are reproduced.
+* Headerless columns (:func:`load_columns`): whitespace-separated samples, any number per line,
+  read row-major (e.g. the SAC ``LA*.dat`` files, 6 per line, cm/s^2); the time step and units
+  are given by the caller.
+
+:func:`load_record` picks the loader from the file suffix. Every failure raises
+:class:`~rockbench.errors.RecordError` naming the file (and the line, for a bad value) or
+:class:`~rockbench.errors.ParameterError` naming the bad argument.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ParameterError, RecordError, check_finite, check_positive
+from .motion import Record, unit_factor
+
+__all__ = ["load_at2", "load_columns", "load_record"]
+
+_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][+-]?\d+)?"
+#: Old PEER: "NPTS=   7818, DT=   .0050 SEC, ..."; NPTS and DT may come in either order.
+_NPTS_KEY = re.compile(r"\bNPTS\s*=\s*(\d+)", re.IGNORECASE)
+_DT_KEY = re.compile(rf"\bDT\s*=\s*({_NUMBER})", re.IGNORECASE)
+#: NGA-West2: "  4000    0.0100    NPTS, DT ..."
+_NGA_LINE = re.compile(rf"^\s*(\d+)\s*,?\s+({_NUMBER})\s+NPTS\s*,\s*DT\b", re.IGNORECASE)
+_UNITS = re.compile(r"\bUNITS\s+OF\s+([A-Za-z][A-Za-z/^0-9*]*)", re.IGNORECASE)
+
+
+def load_at2(path: str | os.PathLike, *, name: str | None = None) -> Record:
+    """Read a PEER AT2 file (accelerations in g) into a :class:`Record` in m/s^2.
+
+    The sample times are ``k * DT``, k = 0..NPTS-1 [s]. ``name`` defaults to the file stem;
+    ``source`` holds the header lines joined with " | ".
+    """
+    path, lines = _read_lines(path)
+    for k, line in enumerate(lines):
+        header = _match_npts_dt(line)
+        if header is not None:
+            break
+    else:
+        raise RecordError(f"record file {path}: no header line with NPTS and DT "
+                          "(is it a PEER AT2 file?)")
+    npts, dt_text = header
+    dt = _to_float(dt_text)
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise RecordError(f"record file {path}, line {k + 1}: DT={dt_text} must be > 0 [s]")
+    head = [h.strip() for h in lines[: k + 1]]
+    units = _UNITS.search(" ".join(head))
+    if units is not None and units.group(1).upper() != "G":
+        raise RecordError(f"record file {path}: units {units.group(1)!r} in the header; "
+                          "AT2 files must be in units of G")
+    values = _parse_values(path, lines, k + 1)
+    if values.size != npts:
+        raise RecordError(f"record file {path}: header line {k + 1} says NPTS={npts} "
+                          f"but {values.size} values follow")
+    _check_enough(path, values)
+    return Record.from_samples(values, dt, units="g", name=path.stem if name is None else name,
+                               source=" | ".join(h for h in head if h))
+
+
+def load_columns(path: str | os.PathLike, *, dt: float, units: str, t0: float = 0.0,
+                 name: str | None = None) -> Record:
+    """Read a headerless file of whitespace-separated samples (any number per line, read
+    row-major) with time step ``dt`` > 0 [s], first sample at ``t0`` [s], in ``units``
+    ("g", "m/s2" or "cm/s2"). Blank lines and lines starting with ``#`` are skipped.
+    ``name`` defaults to the file stem.
+    """
+    dt = check_positive("dt", dt)
+    t0 = check_finite("t0", t0)
+    unit_factor(units)
+    path, lines = _read_lines(path)
+    values = _parse_values(path, lines, 0)
+    _check_enough(path, values)
+    return Record.from_samples(values, dt, t0=t0, units=units,
+                               name=path.stem if name is None else name,
+                               source=f"{path.name} (dt={dt:g} s, units={units})")
+
+
+def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str | None = None,
+                scale: float = 1.0) -> Record:
+    """Load a record by file type: ``.AT2`` (any case) with :func:`load_at2`, anything else with
+    :func:`load_columns`, which needs ``dt`` [s] and ``units``. The result is multiplied by
+    ``scale`` (finite, non-zero) when it is not 1.
+
+    Errors name the command-line options: ``record-dt``, ``record-units``, ``record-scale``.
+    For an AT2 file, ``dt`` and ``units`` may be omitted; if given they must agree with the file
+    (DT of the header, units of g).
+    """
+    scale = check_finite("record-scale", scale)
+    if scale == 0.0:
+        raise ParameterError("record-scale", scale, "a finite, non-zero real number")
+    path = Path(path)
+    if path.suffix.lower() == ".at2":
+        record = load_at2(path)
+        if dt is not None and not math.isclose(check_positive("record-dt", dt), record.dt,
+                                                rel_tol=1e-9):
+            raise ParameterError("record-dt", dt,
+                                 f"omitted or equal to the file's DT = {record.dt:g} s",
+                                 f"{path.name} gives its own time step")
+        if units is not None and units != "g":
+            raise ParameterError("record-units", units, "omitted or 'g'",
+                                 f"AT2 file {path.name} is in units of g")
+    else:
+        if dt is None:
+            raise ParameterError("record-dt", None, "> 0 [s]",
+                                 f"required for the headerless record file {path.name}")
+        if units is None:
+            raise ParameterError("record-units", None, "one of 'g', 'm/s2', 'cm/s2'",
+                                 f"required for the headerless record file {path.name}")
+        dt = check_positive("record-dt", dt)
+        unit_factor(units, "record-units")
+        record = load_columns(path, dt=dt, units=units)
+    return record if scale == 1.0 else record.scaled(scale)
+
+
+# ------------------------------------------------------------------------------------------------
+def _read_lines(path: str | os.PathLike) -> tuple[Path, list[str]]:
+    """The file's lines; RecordError naming the file if it cannot be read or is empty."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="ascii", errors="strict")
+    except UnicodeDecodeError as exc:
+        raise RecordError(f"record file {path}: not plain ASCII text (byte {exc.start})") from None
+    except OSError as exc:
+        raise RecordError(f"cannot read record file {path}: {exc.strerror or exc}") from None
+    if not text.strip():
+        raise RecordError(f"record file {path} is empty")
+    return path, text.splitlines()
+
+
+def _match_npts_dt(line: str) -> tuple[int, str] | None:
+    """(NPTS, DT text) if ``line`` is an AT2 header line giving both, else None."""
+    nga = _NGA_LINE.match(line)
+    if nga is not None:
+        return int(nga.group(1)), nga.group(2)
+    npts, dt = _NPTS_KEY.search(line), _DT_KEY.search(line)
+    if npts is not None and dt is not None:
+        return int(npts.group(1)), dt.group(1)
+    return None
+
+
+def _to_float(token: str) -> float:
+    """Parse a number, accepting Fortran's D exponent (1.0D-03)."""
+    return float(token.replace("D", "E").replace("d", "e"))
+
+
+def _parse_values(path: Path, lines: list[str], start: int) -> np.ndarray:
+    """All numbers on ``lines[start:]``, row-major; RecordError naming the file and 1-based line
+    of the first token that is not a finite number."""
+    values: list[float] = []
+    for k in range(start, len(lines)):
+        line = lines[k].strip()
+        if not line or line.startswith("#"):
+            continue
+        for token in line.split():
+            try:
+                x = _to_float(token)
+            except ValueError:
+                raise RecordError(f"record file {path}, line {k + 1}: {token!r} is not a number"
+                                  ) from None
+            if not math.isfinite(x):
+                raise RecordError(f"record file {path}, line {k + 1}: value {token!r} is not "
+                                  "finite")
+            values.append(x)
+    return np.array(values, dtype=float)
+
+
+def _check_enough(path: Path, values: np.ndarray) -> None:
+    if values.size < 2:
+        raise RecordError(f"record file {path}: {values.size} acceleration value(s); "
+                          "a record needs at least 2")

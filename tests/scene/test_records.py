@@ -1,0 +1,232 @@
+"""Record loaders, checked on the real records of ``shared/records`` (PROVENANCE.md) and on
+small synthetic files for every failure mode."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rockbench.constants import G_STANDARD
+from rockbench.errors import ParameterError, RecordError
+from rockbench.scene.records import load_at2, load_columns, load_record
+
+RECORDS = Path(__file__).resolve().parents[2].parent / "shared" / "records"
+SAC_LA = RECORDS / "sac-la-2in50"
+
+#: PROVENANCE.md, section 2: (file, NPTS, DT [s], PGA [g], PGA [cm/s^2], time of PGA [s]).
+AT2_FILES = [
+    ("IV1979_ElCentroArray4_230.AT2", 7818, 0.005, 0.37043, 363.27, 5.27),
+    ("IV1940_ElCentro_180.AT2", 4000, 0.01, 0.31288, 306.83, 2.15),
+    ("ChiChi1999_TCU052-N.AT2", 18000, 0.005, 0.41903, 410.93, 34.0),
+]
+#: PROVENANCE.md, section 3: PGAs [cm/s^2] equal to the published SAC table.
+SAC_PGA = {"LA21": 1258.00, "LA22": 902.75, "LA25": 851.62, "LA26": 925.29,
+           "LA27": 908.70, "LA28": 1304.10}
+
+
+def need(path: Path) -> Path:
+    if not path.exists():
+        pytest.skip(f"shared record data not found at {path}")
+    return path
+
+
+def sac_table() -> dict[str, dict[str, str]]:
+    with open(need(SAC_LA / "records.csv"), newline="") as fh:
+        return {row["record"]: row for row in csv.DictReader(fh)}
+
+
+# --- the real records -----------------------------------------------------------------------------
+@pytest.mark.parametrize("fname, npts, dt, pga_g, pga_cm, t_pga", AT2_FILES)
+def test_at2_records_match_provenance(fname, npts, dt, pga_g, pga_cm, t_pga):
+    r = load_at2(need(RECORDS / fname))
+    assert r.npts == npts
+    assert r.dt == dt
+    assert r.t_start == 0.0
+    assert r.t_end == pytest.approx((npts - 1) * dt, abs=1e-9)
+    assert r.peak / G_STANDARD == pytest.approx(pga_g, abs=5e-6)
+    assert r.peak * 100 == pytest.approx(pga_cm, abs=0.005)
+    # PROVENANCE rounds the time (ChiChi: 34.005 s is written 34.0 s)
+    assert r.time[np.argmax(np.abs(r.samples))] == pytest.approx(t_pga, abs=1.01 * dt)
+    assert r.name == Path(fname).stem and r.units_in == "g"
+    assert "NPTS" in r.source and "DT" in r.source
+    assert load_record(RECORDS / fname).describe() == r.describe()
+
+
+def test_el_centro_array4_peak_equals_its_header():
+    r = load_at2(need(RECORDS / "IV1979_ElCentroArray4_230.AT2"))
+    assert "PGA=   .37043 G" in r.source
+    assert round(r.peak / G_STANDARD, 5) == 0.37043  # the header's PGA, to its 5 decimals
+
+
+def test_sac_la_records_match_their_table():
+    table = sac_table()
+    assert len(table) == 20
+    for rec, row in table.items():
+        r = load_columns(need(SAC_LA / f"{rec}.dat"), dt=float(row["dt_s"]), units="cm/s2")
+        assert r.name == rec
+        assert r.npts == int(row["npts"])
+        assert r.dt == float(row["dt_s"])
+        assert r.peak * 100 == pytest.approx(float(row["pga_cm_s2"]), abs=0.005)
+        if rec in SAC_PGA:
+            assert r.peak * 100 == pytest.approx(SAC_PGA[rec], abs=0.01)
+
+
+def test_sac_la_through_load_record_with_scale():
+    row = sac_table()["LA21"]
+    r = load_record(SAC_LA / "LA21.dat", dt=float(row["dt_s"]), units="cm/s2", scale=0.5)
+    assert r.peak * 100 == pytest.approx(0.5 * 1258.00, abs=0.005)
+    assert r.name == "LA21 x0.5"
+    assert r.describe()["scale"] == 0.5
+
+
+# --- synthetic AT2 files --------------------------------------------------------------------------
+OLD_HEADER = ("PEER STRONG MOTION DATABASE RECORD. PROCESSING BY PACIFIC ENGINEERING.\n"
+              "SOMEWHERE 1/1/01, STATION, 000\n"
+              "ACCELERATION TIME HISTORY IN UNITS OF G. FILTER POINTS: HP=0.1 Hz LP=25.0 Hz\n")
+
+
+def write(tmp_path: Path, name: str, text: str) -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("header_line", [
+    "NPTS=      7, DT=   .0050 SEC,   0 POLE @    40.00000 HZ, ACAUSAL",
+    "NPTS=  7, DT= .00500 SEC",
+    "DT= 5.0E-03 SEC, NPTS= 7",
+    "       7    0.0050    NPTS, DT",
+])
+def test_at2_header_variants(tmp_path, header_line):
+    values = "  .1000000E+00  -.2000000E+00   .3E-01   0.4 -5e-1\n  .6  -.7000000E+00\n"
+    path = write(tmp_path, "x.at2", OLD_HEADER + header_line + "\n" + values)
+    r = load_record(path)  # lower-case suffix is still AT2
+    assert r.npts == 7 and r.dt == 0.005
+    np.testing.assert_allclose(r.samples / G_STANDARD, [0.1, -0.2, 0.03, 0.4, -0.5, 0.6, -0.7],
+                               rtol=1e-15)
+    np.testing.assert_allclose(r.time, 0.005 * np.arange(7), rtol=1e-15)
+
+
+def at2(tmp_path: Path, npts: int, values: str, header_line: str | None = None) -> Path:
+    line = header_line or f"NPTS= {npts}, DT= .0100 SEC"
+    return write(tmp_path, "bad.AT2", OLD_HEADER + line + "\n" + values)
+
+
+@pytest.mark.parametrize("npts, values, header_line, message", [
+    (4, ".1 .2 .3\n", None, "NPTS=4 but 3 values"),
+    (2, ".1 .2 .3\n", None, "NPTS=2 but 3 values"),
+    (3, ".1 .2\n.3 abc\n", None, "line 6"),
+    (3, ".1 nan .3\n", None, "not finite"),
+    (3, ".1 .2 inf\n", None, "not finite"),
+    (3, ".1 .2 .3\n", "NPTS= 3, DT= .0000 SEC", "DT"),
+    (3, ".1 .2 .3\n", "NPTS= 3 SEC", "NPTS and DT"),
+    (1, ".1\n", None, "at least 2"),
+])
+def test_at2_errors_name_the_file(tmp_path, npts, values, header_line, message):
+    path = at2(tmp_path, npts, values, header_line)
+    with pytest.raises(RecordError, match=message) as info:
+        load_at2(path)
+    assert str(path) in str(info.value)
+
+
+def test_at2_in_other_units_is_refused(tmp_path):
+    text = OLD_HEADER.replace("UNITS OF G.", "UNITS OF CM/SEC/SEC.") + "NPTS= 2, DT= .01\n1 2\n"
+    path = write(tmp_path, "cm.AT2", text)
+    with pytest.raises(RecordError, match="CM/SEC/SEC") as info:
+        load_at2(path)
+    assert str(path) in str(info.value)
+
+
+@pytest.mark.parametrize("loader", [load_at2, lambda p: load_columns(p, dt=0.01, units="g")])
+def test_missing_and_empty_files(tmp_path, loader):
+    missing = tmp_path / "nope.AT2"
+    with pytest.raises(RecordError, match="nope.AT2"):
+        loader(missing)
+    empty = write(tmp_path, "empty.dat", "  \n\n")
+    with pytest.raises(RecordError, match="empty.dat.*empty"):
+        loader(empty)
+    binary = tmp_path / "bin.dat"
+    binary.write_bytes(b"\x00\xff\xfe 1 2 3")
+    with pytest.raises(RecordError, match="bin.dat"):
+        loader(binary)
+
+
+# --- headerless columns ---------------------------------------------------------------------------
+def test_columns_row_major_units_and_t0(tmp_path):
+    path = write(tmp_path, "LAxx.dat", "  1.0  2.0  3.0\n\n 4.0\n# note\n5.0 6.0\n")
+    r = load_columns(path, dt=0.02, units="cm/s2", t0=1.0)
+    np.testing.assert_allclose(r.samples, [0.01, 0.02, 0.03, 0.04, 0.05, 0.06], rtol=1e-15)
+    np.testing.assert_allclose(r.time, 1.0 + 0.02 * np.arange(6), rtol=1e-15)
+    assert r.name == "LAxx" and r.units_in == "cm/s2"
+    assert load_columns(path, dt=0.02, units="m/s2", name="q").samples[-1] == 6.0
+    assert load_columns(path, dt=0.02, units="g").samples[-1] == 6.0 * G_STANDARD
+
+
+def test_columns_bad_token_names_line(tmp_path):
+    path = write(tmp_path, "x.dat", "1 2\n3 4\n5 six\n")
+    with pytest.raises(RecordError, match=r"x\.dat, line 3: 'six'"):
+        load_columns(path, dt=0.01, units="g")
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"dt": 0.0, "units": "g"}, "dt"),
+    ({"dt": -1.0, "units": "g"}, "dt"),
+    ({"dt": math.nan, "units": "g"}, "dt"),
+    ({"dt": 0.01, "units": "gal"}, "units"),
+    ({"dt": 0.01, "units": None}, "units"),
+    ({"dt": 0.01, "units": "g", "t0": math.nan}, "t0"),
+])
+def test_columns_bad_arguments(tmp_path, kwargs, name):
+    path = write(tmp_path, "x.dat", "1 2 3\n")
+    with pytest.raises(ParameterError, match=name):
+        load_columns(path, **kwargs)
+
+
+finite = st.floats(-1e6, 1e6, allow_nan=False)
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.lists(st.lists(finite, min_size=1, max_size=8), min_size=1, max_size=30),
+       dt=st.floats(1e-4, 1.0), t0=st.floats(-10.0, 10.0))
+def test_columns_round_trip(tmp_path, rows, dt, t0):
+    values = [v for row in rows for v in row]
+    path = write(tmp_path, "rt.dat", "\n".join(" ".join(repr(v) for v in row) for row in rows))
+    if len(values) < 2:
+        with pytest.raises(RecordError, match="at least 2"):
+            load_columns(path, dt=dt, units="m/s2")
+        return
+    r = load_columns(path, dt=dt, units="m/s2", t0=t0)
+    np.testing.assert_array_equal(r.samples, values)
+    assert r.npts == len(values) and r.dt == dt and r.t_start == t0
+
+
+# --- dispatch -------------------------------------------------------------------------------------
+@pytest.mark.parametrize("kwargs, name", [
+    ({"units": "g"}, "record-dt"),
+    ({"dt": 0.01}, "record-units"),
+    ({"dt": 0.0, "units": "g"}, "record-dt"),
+    ({"dt": 0.01, "units": "mm/s2"}, "record-units"),
+    ({"dt": 0.01, "units": "g", "scale": 0.0}, "record-scale"),
+    ({"dt": 0.01, "units": "g", "scale": math.nan}, "record-scale"),
+])
+def test_load_record_names_the_option(tmp_path, kwargs, name):
+    path = write(tmp_path, "x.dat", "1 2 3\n")
+    with pytest.raises(ParameterError, match=name):
+        load_record(path, **kwargs)
+
+
+def test_load_record_at2_options_must_agree_with_file(tmp_path):
+    path = at2(tmp_path, 3, ".1 .2 .3\n")
+    assert load_record(path, dt=0.01, units="g", scale=-2.0).samples[0] == \
+        pytest.approx(-0.2 * G_STANDARD, rel=1e-15)
+    with pytest.raises(ParameterError, match="record-dt"):
+        load_record(path, dt=0.02)
+    with pytest.raises(ParameterError, match="record-units"):
+        load_record(path, units="cm/s2")
