@@ -1,0 +1,1 @@
+"""pytest plugin registered by rockbench (entry point ``pytest11``)."""
