@@ -224,8 +224,10 @@ class FrameMechanism:
 
 
 def geometric_limit(mech) -> float:
-    """First |phi| [rad] in the mechanism's direction at which the loop closure fails, searched
-    on (0, pi]; ``pi`` if it never fails there."""
+    """First |phi| [rad] in the mechanism's direction at which the mechanism ends, searched on
+    (0, pi]: the loop closure fails (toggle of the four-bar linkage), or a column stops rotating
+    in the rocking direction relative to the foundation or the beam (the beam would then bear
+    on the column's other top corner); ``pi`` if neither happens."""
     if not isinstance(mech, FrameMechanism):
         return mech.limit()
     s = mech.direction
@@ -234,17 +236,23 @@ def geometric_limit(mech) -> float:
     def margin(x: float) -> float:
         return mech.closure_margin(s * x) / scale
 
+    def same_sense(x: float) -> bool:
+        # the mechanism holds while both columns rotate, relative to the foundation and to the
+        # beam, in the rocking direction (else the beam would bear on the other top corner)
+        th_b, th_r = mech.angles(s * x)
+        return s * (s * x - th_b) > 0.0 and s * (th_r - th_b) > 0.0 and s * th_r > 0.0
+
     n = 720
     xs = [0.0]
     ms = [margin(0.0)]
     for i in range(1, n + 1):
         x = math.pi * i / n
         m = margin(x)
-        if m <= 0.0:  # the circles no longer intersect: bisect the crossing
-            lo, hi = xs[-1], x
+        if m <= 0.0 or not same_sense(x):  # the linkage cannot be assembled, or stops
+            lo, hi = xs[-1], x             # being this mechanism: bisect the crossing
             for _ in range(60):
                 mid = 0.5 * (lo + hi)
-                if margin(mid) > 0.0:
+                if margin(mid) > 0.0 and same_sense(mid):
                     lo = mid
                 else:
                     hi = mid

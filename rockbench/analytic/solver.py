@@ -186,12 +186,11 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         if mode == 0:
             tu, s = next_uplift(t, t_end)
             if tu is None:
-                quiet = mot.max_abs_after(t) <= min(lam_p, -lam_n)
-                t_stop = t if quiet else t_end
-                segments.append((t, max(t_stop, t), None, 0, intact))
-                if quiet:
-                    t_end = t
-                t = t_end
+                # no uplift before t_end: nothing can change any more once the motion is
+                # over, so the run ends at the later of now and the motion's end
+                t_stop = min(t_end, max(t, mot.t_end))
+                segments.append((t, t_stop, None, 0, intact))
+                t = t_end = t_stop
                 break
             segments.append((t, tu, None, 0, intact))
             rows.append(dict(t=tu, kind="uplift", phi=0.0, phidot_before=0.0, phidot_after=0.0,

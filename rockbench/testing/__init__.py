@@ -1,1 +1,32 @@
-"""pytest-ready consistency checks (filled in by the comparison issue)."""
+"""Consistency checks for your own test suites.
+
+* :func:`assert_agree` - does a backend's run agree with the analytic reference (peak rotation,
+  history, eta of every impact, overturning verdict)? Raises ``AssertionError`` saying which
+  metric failed, by how much and where in time.
+* :func:`check_backend` - does a backend adapter (a new or modified one) honour the contract of
+  :mod:`rockbench.engines.base`? Like Gymnasium's environment checker.
+* a pytest plugin (installed with rockbench, :mod:`rockbench.testing.plugin`): the fixture
+  ``rockbench_backend`` is parametrized over the available engines, ``rockbench_reference``
+  runs (and caches) the analytic reference. See ``docs/testing.md``.
+
+The names are imported on first use, so that the pytest plugin (a submodule, loaded by every
+pytest run) stays cheap to import.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["assert_agree", "check_backend", "BackendReport", "Check"]
+
+
+def __getattr__(name: str) -> Any:
+    if name in __all__:
+        from . import checks
+
+        return getattr(checks, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(list(globals()) + __all__)

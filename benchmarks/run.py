@@ -1,0 +1,153 @@
+"""Speed and accuracy benchmark of every available backend, measured side by side in one run.
+
+    python benchmarks/run.py [--quick] [--out benchmarks/results]
+
+Writes ``results.md`` (tables + the machine it ran on) and ``results.csv``. Commit both with
+any change to a solver or an engine adapter. Each timing is the median of ``--repeat`` runs;
+``wall_s`` counts the integration/stepping only (model building excluded), ``total_s`` the whole
+``rb.run`` call. Ratios are taken against the analytic backend on the same case in this run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+
+import rockbench as rb
+from rockbench.compare import metrics
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def machine() -> dict:
+    return {"date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+            "cpu": _cpu(), "cores": os.cpu_count(), "python": sys.version.split()[0],
+            "platform": platform.platform(), "rockbench": rb.__version__,
+            "engines": "; ".join(f"{r['name']}: {r.get('version', r.get('reason'))}"
+                                 for r in rb.engine_info())}
+
+
+def cases(quick: bool):
+    asym = rb.load_scene("paper-asymmetric")
+    hyb = rb.load_scene("paper-asymmetric-hybrid-eps1")
+    block = rb.load_scene("housner-block")
+    out = [
+        ("block free rocking 0.5a, 10 s", block, None, 0.5 * block.alpha, 10.0),
+        ("asym frame free rocking 0.5a, 10 s", asym, None, 0.5 * asym.alpha, 10.0),
+        ("asym frame, sym. Ricker A=2 W=3", asym,
+         rb.RickerPulse.dimensionless(2.0, 3.0, asym.structure, "symmetric", 1), 0.0, None),
+        ("asym hybrid eps1, antisym. Ricker A=4 W=3", hyb,
+         rb.RickerPulse.dimensionless(4.0, 3.0, hyb.structure, "antisymmetric", -1), 0.0, None),
+    ]
+    return out[:2] if quick else out
+
+
+def timed(scene, motion, engine, phi0, duration, repeat, **settings):
+    runs, totals = [], []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        r = rb.run(scene, motion, engine=engine, phi0=phi0, duration=duration, **settings)
+        totals.append(time.perf_counter() - t)
+        runs.append(r)
+    i = sorted(range(repeat), key=lambda k: runs[k].cost.wall_s)[repeat // 2]
+    return runs[i], statistics.median(totals)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    args = ap.parse_args(argv)
+    engines = rb.available_backends()
+    rows = []
+    for label, scene, motion, phi0, duration in cases(args.quick):
+        ref, ref_total = timed(scene, motion, "analytic", phi0, duration, args.repeat)
+        for eng in engines:
+            r, total = (ref, ref_total) if eng == "analytic" else timed(
+                scene, motion, eng, phi0, duration, args.repeat)
+            m = metrics(r, ref)
+            rows.append({"case": label, "backend": eng, "dt": r.settings.get("dt"),
+                         "status": r.summary.status, "sim_s": r.cost.sim_time,
+                         "wall_s": r.cost.wall_s, "total_s": total,
+                         "real_time_factor": r.cost.real_time_factor,
+                         "total_vs_analytic": total / ref_total,
+                         "peak_rel_error": m["peak_rel_error"], "nrmse": m["nrmse"],
+                         "eta_max_rel_error": m["eta_max_rel_error"]})
+            print(f"{label:45s} {eng:9s} total {total:7.3f} s  rtf {rows[-1]['real_time_factor']:9.1f}",
+                  flush=True)
+    # accuracy vs cost: dt sweep on the pulse case
+    sweep = []
+    if not args.quick:
+        label, scene, motion, phi0, duration = cases(False)[2]
+        ref, _ = timed(scene, motion, "analytic", phi0, duration, 1)
+        for eng in engines:
+            if eng == "analytic":
+                continue
+            for dt in (2e-3, 1e-3, 5e-4, 2e-4):
+                try:
+                    r, total = timed(scene, motion, eng, phi0, duration, 1, dt=dt,
+                                     output_dt=max(dt, 1e-3))
+                except rb.ParameterError as e:
+                    sweep.append({"backend": eng, "dt": dt, "status": f"refused: {e}"})
+                    continue
+                m = metrics(r, ref)
+                sweep.append({"backend": eng, "dt": dt, "status": r.summary.status,
+                              "wall_s": r.cost.wall_s, "real_time_factor": r.cost.real_time_factor,
+                              "peak_rel_error": m["peak_rel_error"], "nrmse": m["nrmse"]})
+                print(f"dt sweep {eng:9s} dt={dt:g}  {sweep[-1]['status']}", flush=True)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    df = pd.DataFrame(rows)
+    df.to_csv(out / "results.csv", index=False)
+    sw = pd.DataFrame(sweep)
+    if len(sw):
+        sw.to_csv(out / "dt_sweep.csv", index=False)
+    mc = machine()
+    with open(out / "results.md", "w") as f:
+        f.write("# Benchmark results\n\nMeasured side by side in one run of `benchmarks/run.py`"
+                f"{' --quick' if args.quick else ''} (median of {args.repeat}).\n\n")
+        f.write("## Machine\n\n" + "\n".join(f"- {k}: {v}" for k, v in mc.items()) + "\n\n")
+        f.write("## Cost and accuracy at default settings\n\n"
+                "`wall_s`: stepping/integration only; `total_s`: the whole `rb.run` call "
+                "(model building included); `total_vs_analytic`: ratio to the analytic backend "
+                "on the same case; errors against the analytic reference (see docs/metrics.md)."
+                "\n\n")
+        f.write(df.to_markdown(index=False, floatfmt=".4g") if _has_tabulate()
+                else df.to_string(index=False))
+        if len(sw):
+            f.write("\n\n## Accuracy vs cost: time-step sweep (asym frame, sym. Ricker A=2 W=3)"
+                    "\n\n")
+            f.write(sw.to_markdown(index=False, floatfmt=".4g") if _has_tabulate()
+                    else sw.to_string(index=False))
+        f.write("\n")
+    print(f"wrote {out / 'results.md'}")
+    return 0
+
+
+def _has_tabulate() -> bool:
+    try:
+        import tabulate  # noqa: F401
+        return True
+    except ImportError:
+        return False
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,759 @@
+"""The ``rockbench`` command line (``rockbench ...`` or ``python -m rockbench ...``).
+
+Commands (``docs/cli.md`` shows each with real output)::
+
+    rockbench scenes   [--json]
+    rockbench info     SCENE [--set key=value ...] [--json]
+    rockbench run      SCENE [--engine NAME] MOTION [--duration S] [--dt S]
+                       [--set key=value ...] [--setting name=value ...] [--out FILE.csv] [--json]
+    rockbench engines  [--json]
+    rockbench compare  SCENE [--engines a,b,...] MOTION [--duration S] [--dt S]
+                       [--set ...] [--setting ...] [--report DIR] [--csv FILE] [--json]
+    rockbench report   [--out DIR] [--records DIR] [--engines a,b,...] [--quick]
+                       [--workers N] [--dask ADDRESS] [--store PATH]
+
+MOTION is one of
+``--pulse symmetric|antisymmetric [--sign 1|-1] --amplitude A --frequency W`` (A = a_g /
+(g tan alpha), W = omega_g / p, alpha and p of the taller column), ``--record FILE
+[--record-dt S --record-units g|m/s2|cm/s2] [--scale F]``, or ``--phi0 X`` (free rocking from
+phi0 = X alpha). Units: SI and radians; times in s.
+
+Errors: any bad input (a :class:`rockbench.errors.RockbenchError` or an argument the parser
+rejects) prints one line ``rockbench: error: ...`` on stderr and returns 2, without a traceback.
+Any other exception is a bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import inspect
+import json
+import math
+import os
+import sys
+from collections.abc import Sequence
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from .constants import G
+from .errors import ParameterError, RecordError, RockbenchError
+
+__all__ = ["build_parser", "main"]
+
+PROG = "rockbench"
+
+#: Units and meaning of the keys of ``rockbench info`` (Reference.constants()).
+INFO_KEYS: dict[str, tuple[str, str]] = {
+    "alpha": ("rad", "slenderness of the taller column, atan(b/H)"),
+    "p": ("rad/s", "frequency parameter of the taller column, sqrt(3g/(4R))"),
+    "eta_ccw": ("-", "restitution of an impact after which it rocks counterclockwise"),
+    "eta_cw": ("-", "restitution of an impact after which it rocks clockwise"),
+    "lambda_ccw": ("g", "ground acceleration that uplifts counterclockwise (signed)"),
+    "lambda_cw": ("g", "ground acceleration that uplifts clockwise (signed)"),
+    "phi_cr_ccw": ("rad", "critical angle, counterclockwise"),
+    "phi_cr_cw": ("rad", "critical angle, clockwise"),
+    "phi_fall_ccw": ("rad", "fall angle (overturned), counterclockwise"),
+    "phi_fall_cw": ("rad", "fall angle (overturned), clockwise"),
+    "phi_cr_ccw_fractured": ("rad", "critical angle after tendon fracture, counterclockwise"),
+    "phi_cr_cw_fractured": ("rad", "critical angle after tendon fracture, clockwise"),
+    "phi_fracture_ccw": ("rad", "rotation at which a tendon fractures, counterclockwise"),
+    "phi_fracture_cw": ("rad", "rotation at which a tendon fractures, clockwise"),
+    "mass": ("kg", "mass of the block"),
+    "mass_left": ("kg", "mass of the left (taller) column"),
+    "mass_right": ("kg", "mass of the right column"),
+    "mass_beam": ("kg", "mass of the beam"),
+    "alpha_right": ("rad", "slenderness of the right column"),
+    "r_BC_ccw": ("m", "beam centre of mass from the pivot, counterclockwise"),
+    "psi_BC_ccw": ("rad", "angle of r_BC, counterclockwise"),
+    "r_BC_cw": ("m", "beam centre of mass from the pivot, clockwise"),
+    "psi_BC_cw": ("rad", "angle of r_BC, clockwise"),
+}
+
+#: Summary rows of ``rockbench compare`` (the full table goes to --csv / --json).
+COMPARE_COLUMNS = ("backend", "status", "max_abs_phi_over_alpha", "peak_rel_error", "nrmse",
+                   "n_impacts", "eta_max_rel_error", "overturned", "verdict_agrees",
+                   "max_penetration", "max_sliding", "wall_s", "real_time_factor")
+
+
+# ==============================================================================================
+# Parser
+# ==============================================================================================
+class CommandLineError(Exception):
+    """An argument the parser rejects (printed as one line, exit code 2)."""
+
+
+class MissingOption(ParameterError):
+    """A required option is missing (a :class:`ParameterError` with a plainer message)."""
+
+    def __init__(self, name: str, valid: str, detail: str = ""):
+        self.name, self.value, self.valid = name, None, valid
+        RockbenchError.__init__(self, f"{name} is required{' ' + detail if detail else ''}: "
+                                f"{valid}")
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors raise instead of printing the usage and exiting, so that
+    :func:`main` prints exactly one line."""
+
+    def error(self, message: str):  # type: ignore[override]
+        raise CommandLineError(message)
+
+
+def _number(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(x):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return x
+
+
+def _positive(text: str) -> float:
+    x = _number(text)
+    if x <= 0.0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return x
+
+
+def _nonzero(text: str) -> float:
+    x = _number(text)
+    if x == 0.0:
+        raise argparse.ArgumentTypeError(f"must be non-zero, got {text!r}")
+    return x
+
+
+def _count(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}")
+    return n
+
+
+def _sign(text: str) -> int:
+    try:
+        s = int(text)
+    except ValueError:
+        s = 0
+    if s not in (1, -1):
+        raise argparse.ArgumentTypeError(f"must be 1 or -1, got {text!r}")
+    return s
+
+
+def _key_value(text: str) -> tuple[str, str]:
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    return key.strip(), value.strip()
+
+
+def _names(text: str) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list of names, got {text!r}")
+    return names
+
+
+def _add_scene_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", metavar="SCENE",
+                   help="a built-in scene name (rockbench scenes) or a path to a .toml file")
+    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=_key_value,
+                   action="append", default=[],
+                   help="override a scene parameter (e.g. span=9, devices.fracture_strain=none)")
+
+
+def _add_motion_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("ground motion (one of --pulse, --record, --phi0)")
+    x = g.add_mutually_exclusive_group()
+    x.add_argument("--pulse", choices=("symmetric", "antisymmetric"),
+                   help="Ricker pulse shape (paper Eq. 29 / Eq. 30)")
+    x.add_argument("--record", metavar="FILE",
+                   help="accelerogram: a PEER .AT2 file or a headerless column file")
+    x.add_argument("--phi0", type=_nonzero, metavar="X",
+                   help="free rocking from phi0 = X alpha (X != 0, + counterclockwise)")
+    g.add_argument("--sign", type=_sign, default=None, metavar="{1,-1}",
+                   help="pulse sign (default 1: the pulse as printed in the paper)")
+    g.add_argument("--amplitude", type=_positive, metavar="A",
+                   help="pulse amplitude A = a_g / (g tan alpha) > 0")
+    g.add_argument("--frequency", type=_positive, metavar="W",
+                   help="pulse frequency W = omega_g / p > 0")
+    g.add_argument("--record-dt", type=_positive, metavar="S",
+                   help="time step [s] of a headerless record file")
+    g.add_argument("--record-units", choices=("g", "m/s2", "cm/s2"),
+                   help="units of a headerless record file")
+    g.add_argument("--scale", type=_nonzero, metavar="F",
+                   help="multiply the record by F (default 1)")
+
+
+def _add_run_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--duration", type=_positive, metavar="S",
+                   help="simulated time [s] from the motion's start (default: motion + 10 s)")
+    p.add_argument("--dt", type=_positive, metavar="S",
+                   help="engine time step [s] (engines only: the analytic model has none)")
+    p.add_argument("--setting", dest="settings", metavar="NAME=VALUE", type=_key_value,
+                   action="append", default=[],
+                   help="set a field of the backend's Settings (e.g. iterations=20)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``rockbench`` command."""
+    from . import __version__
+
+    parser = _Parser(prog=PROG, description="Analytic rocking-frame reference vs physics "
+                     "engines. Units: SI and radians.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    p = sub.add_parser("scenes", help="list the built-in scenes")
+    p.add_argument("--json", action="store_true", help="print JSON")
+
+    p = sub.add_parser("info", help="analytic constants of a scene (alpha, p, lambda, eta, ...)")
+    _add_scene_options(p)
+    p.add_argument("--json", action="store_true", help="print JSON")
+
+    p = sub.add_parser("run", help="simulate a scene with one backend")
+    _add_scene_options(p)
+    p.add_argument("--engine", default="analytic", metavar="NAME",
+                   help="backend (rockbench engines; default analytic)")
+    _add_motion_options(p)
+    _add_run_options(p)
+    p.add_argument("--out", metavar="FILE.csv",
+                   help="write the history CSV (and the events to <stem>_events.csv)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+
+    p = sub.add_parser("engines", help="registered backends and installed engine versions")
+    p.add_argument("--json", action="store_true", help="print JSON")
+
+    p = sub.add_parser("compare", help="run several backends and compare them with the "
+                       "analytic reference")
+    _add_scene_options(p)
+    p.add_argument("--engines", type=_names, metavar="A,B,...",
+                   help="backends to compare (default: every available one)")
+    _add_motion_options(p)
+    _add_run_options(p)
+    p.add_argument("--report", metavar="DIR", help="write an HTML report of the case to DIR")
+    p.add_argument("--csv", metavar="FILE", help="write the metrics table as CSV")
+    p.add_argument("--json", action="store_true", help="print the tables as JSON")
+
+    p = sub.add_parser("report", help="run the default campaign and write the HTML report")
+    p.add_argument("--out", default="reports", metavar="DIR", help="output folder (reports)")
+    p.add_argument("--records", metavar="DIR", help="also run every record in this folder")
+    p.add_argument("--engines", type=_names, metavar="A,B,...",
+                   help="backends (default: every available one)")
+    p.add_argument("--quick", action="store_true", help="a small campaign (minutes)")
+    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--dask", metavar="ADDRESS",
+                   help="run the cases on a dask.distributed scheduler at ADDRESS")
+    p.add_argument("--store", metavar="PATH",
+                   help="result store (Parquet or CSV); finished cases are skipped on a rerun")
+    return parser
+
+
+# ==============================================================================================
+# Shared helpers
+# ==============================================================================================
+def _print_json(data: Any) -> None:
+    print(json.dumps(_jsonable(data), indent=2, allow_nan=False))
+
+
+def _jsonable(x: Any) -> Any:
+    """Plain JSON types; non-finite floats become null."""
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    if x is None or isinstance(x, str):
+        return x
+    if isinstance(x, Path):
+        return str(x)
+    try:
+        import pandas as pd
+        if x is pd.NA or x is pd.NaT:
+            return None
+    except ImportError:  # pragma: no cover
+        pass
+    return str(x)
+
+
+def _fmt(v: Any, digits: int = 6) -> str:
+    if v is None:
+        return "none"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else f"{v:.{digits}g}"
+    return str(v)
+
+
+def _table(rows: list[list[str]], header: list[str]) -> str:
+    """A plain left-aligned text table."""
+    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
+    lines = ["  ".join(str(c).ljust(w) for c, w in zip(header, widths)).rstrip(),
+             "  ".join("-" * w for w in widths)]
+    lines += ["  ".join(str(c).ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+    return "\n".join(lines)
+
+
+def _scene_overrides(pairs: list[tuple[str, str]]) -> dict[str, Any]:
+    """``--set`` pairs as load_scene overrides; a value that is not a number, ``none`` or a
+    structure type is rejected here, naming its key."""
+    out: dict[str, Any] = {}
+    for key, raw in pairs:
+        try:
+            out[key] = float(raw)
+        except ValueError:
+            if raw.lower() not in ("none", "null", "block", "frame"):
+                raise ParameterError(f"--set {key}", raw, "a number or 'none'") from None
+            out[key] = raw
+    return out
+
+
+def _load_scene(args: argparse.Namespace):
+    from .scene import load_scene
+
+    return load_scene(args.scene, _scene_overrides(args.overrides))
+
+
+def _setting_value(cls: type, name: str, raw: str) -> Any:
+    """Parse ``raw`` as the type of the Settings field ``name`` (from its default value)."""
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    if name not in fields:
+        raise ParameterError(f"--setting {name}", raw,
+                             f"a field of {cls.__qualname__}: {', '.join(fields)}")
+    f = fields[name]
+    default = f.default if f.default is not dataclasses.MISSING else None
+    low = raw.lower()
+    try:
+        if isinstance(default, bool):
+            if low in ("true", "yes", "1", "on"):
+                return True
+            if low in ("false", "no", "0", "off"):
+                return False
+            raise ValueError
+        if isinstance(default, int):
+            return int(raw)
+        if isinstance(default, float):
+            return float(raw)
+        if isinstance(default, str):
+            return raw
+        if low in ("none", "null"):
+            return None
+        try:
+            return float(raw)
+        except ValueError:
+            return raw
+    except ValueError:
+        kind = type(default).__name__
+        raise ParameterError(f"--setting {name}", raw, f"a value of type {kind}") from None
+
+
+def _backend_overrides(engine: str, args: argparse.Namespace) -> dict[str, Any]:
+    """Settings overrides for ``engine`` from --dt and --setting (validated by its Settings)."""
+    from .engines import get_backend
+
+    cls = get_backend(engine).Settings
+    names = {f.name for f in dataclasses.fields(cls)}
+    out: dict[str, Any] = {}
+    for name, raw in args.settings:
+        out[name] = _setting_value(cls, name, raw)
+    if args.dt is not None:
+        if "dt" not in names:
+            raise ParameterError("--dt", args.dt, f"omitted for the {engine} backend",
+                                 f"{engine} has no time step; its settings are "
+                                 f"{', '.join(sorted(names))}")
+        if "dt" in out:
+            raise ParameterError("--dt", args.dt, "omitted when --setting dt=... is given")
+        out["dt"] = args.dt
+    if "dt" in out and "output_dt" in names and "output_dt" not in out:
+        # keep the default output grid unless the step is coarser than it
+        default_out = next(f.default for f in dataclasses.fields(cls) if f.name == "output_dt")
+        if isinstance(out["dt"], (int, float)) and out["dt"] > default_out:
+            out["output_dt"] = out["dt"]
+    cls(**out)  # validate now: errors name the field
+    return out
+
+
+def _motion(args: argparse.Namespace, scene) -> tuple[Any, float]:
+    """(ground motion or None, phi0 [rad]) from the motion options."""
+    pulse_opts = {"--sign": args.sign, "--amplitude": args.amplitude,
+                  "--frequency": args.frequency}
+    record_opts = {"--record-dt": args.record_dt, "--record-units": args.record_units,
+                   "--scale": args.scale}
+    if args.pulse is None:
+        for opt, v in pulse_opts.items():
+            if v is not None:
+                raise ParameterError(opt, v, "given only with --pulse")
+    if args.record is None:
+        for opt, v in record_opts.items():
+            if v is not None:
+                raise ParameterError(opt, v, "given only with --record")
+
+    if args.pulse is not None:
+        from .scene import RickerPulse
+
+        for opt, what in (("--amplitude", "A = a_g / (g tan alpha) > 0"),
+                          ("--frequency", "W = omega_g / p > 0")):
+            if pulse_opts[opt] is None:
+                raise MissingOption(opt, what, "with --pulse")
+        pulse = RickerPulse.dimensionless(args.amplitude, args.frequency, scene.structure,
+                                          args.pulse, 1 if args.sign is None else args.sign)
+        return pulse, 0.0
+
+    if args.record is not None:
+        from .scene import load_record
+
+        path = Path(args.record)
+        if not path.is_file():
+            raise RecordError(f"--record: file {str(path)!r} does not exist")
+        if path.suffix.lower() != ".at2":
+            if args.record_dt is None:
+                raise MissingOption("--record-dt", "the time step [s] > 0",
+                                    f"for the headerless record file {path.name}")
+            if args.record_units is None:
+                raise MissingOption("--record-units", "one of g, m/s2, cm/s2",
+                                    f"for the headerless record file {path.name}")
+        return load_record(path, dt=args.record_dt, units=args.record_units,
+                           scale=1.0 if args.scale is None else args.scale), 0.0
+
+    if args.phi0 is not None:
+        fall = min(scene.fall_angles.values())
+        limit = fall / scene.alpha
+        if abs(args.phi0) >= limit:
+            raise ParameterError("--phi0", args.phi0,
+                                 f"0 < |phi0| < {limit:.4g} (multiples of alpha; fall angle "
+                                 f"{fall:.4g} rad)")
+        return None, args.phi0 * scene.alpha
+
+    raise MissingOption("a ground motion", "--pulse, --record, or --phi0 for free rocking",
+                        "(nothing would move)")
+
+
+def _describe_motion(motion, phi0: float, alpha: float) -> str:
+    if motion is None:
+        return f"free rocking from phi0 = {phi0 / alpha:.4g} alpha = {phi0:.6g} rad"
+    d = motion.describe()
+    if d.get("kind") == "ricker":
+        text = (f"{d['shape']} Ricker pulse, sign {d['sign']:+d}: a_g = {d['amplitude_m_s2']:.4g}"
+                f" m/s^2, T_g = {d['period_s']:.4g} s (omega_g = {d['omega_rad_s']:.4g} rad/s)")
+        if "A" in d:
+            text += f", A = {d['A']:g}, W = {d['W']:g}"
+        return text
+    if d.get("kind") == "record":
+        return (f"record {d['name']}: {d['npts']} samples, dt = {d['dt_s']:g} s, "
+                f"PGA = {d['pga_m_s2']:.4g} m/s^2 ({d['pga_m_s2'] / G:.3g} g), "
+                f"scale {d['scale']:g}")
+    return str(d)
+
+
+def _events_path(out: Path) -> Path:
+    return out.with_name(f"{out.stem}_events.csv")
+
+
+# ==============================================================================================
+# Commands
+# ==============================================================================================
+def cmd_scenes(args: argparse.Namespace) -> int:
+    from .scene import builtin_scenes, load_scene
+
+    rows = [{"name": name, "type": load_scene(name).structure.kind, "description": desc}
+            for name, desc in builtin_scenes().items()]
+    if args.json:
+        _print_json(rows)
+    else:
+        print(_table([[r["name"], r["type"], r["description"]] for r in rows],
+                     ["name", "type", "description"]))
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from . import info
+
+    scene = _load_scene(args)
+    consts = info(scene)
+    if args.json:
+        _print_json(consts)
+        return 0
+    alpha = consts["alpha"]
+    print(f"scene: {consts.get('scene', scene.name)} ({consts.get('type', scene.structure.kind)})"
+          f"{' with devices' if scene.has_devices else ''}")
+    rows = []
+    for key, value in consts.items():
+        if key in ("scene", "type"):
+            continue
+        unit, meaning = INFO_KEYS.get(key, ("", ""))
+        if unit == "rad" and key != "alpha" and isinstance(value, float):
+            meaning += f" (= {value / alpha:.4g} alpha)"
+        rows.append([key, _fmt(value), unit, meaning])
+    print(_table(rows, ["quantity", "value", "unit", "meaning"]))
+    return 0
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from . import run
+
+    scene = _load_scene(args)
+    overrides = _backend_overrides(args.engine, args)
+    motion, phi0 = _motion(args, scene)
+    result = run(scene, motion, engine=args.engine, duration=args.duration, phi0=phi0,
+                 **overrides)
+    files = {}
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        result.history.to_csv(out, index=False)
+        result.events.to_csv(_events_path(out), index=False)
+        files = {"history_csv": str(out), "events_csv": str(_events_path(out))}
+
+    if args.json:
+        data = result.to_json()
+        data["engine"] = args.engine
+        data["phi0"] = phi0
+        data["real_time_factor"] = result.cost.real_time_factor
+        data.update(files)
+        _print_json(data)
+        return 0
+
+    s, c, alpha = result.summary, result.cost, scene.alpha
+    print(f"{scene.name}, engine {args.engine}: {_describe_motion(motion, phi0, alpha)}")
+    if s.status != "ok":
+        print(f"status             {s.status}: {s.reason}")
+    rows = [
+        ["max |phi| / alpha", f"{s.max_abs_phi_over_alpha:.4g}",
+         f"(max |phi| = {s.max_abs_phi:.4g} rad, alpha = {alpha:.4g} rad)"],
+        ["uplifted", _fmt(s.uplifted),
+         f"(first at t = {s.t_uplift:.4g} s)" if s.t_uplift is not None else ""],
+        ["impacts", str(s.n_impacts), ""],
+        ["exceeded critical", _fmt(s.exceeded_critical), ""],
+        ["overturned", _fmt(s.overturned),
+         f"(at t = {s.t_overturn:.4g} s)" if s.t_overturn is not None else ""],
+        ["fractured", _fmt(s.fractured),
+         f"(at t = {s.t_fracture:.4g} s)" if s.t_fracture is not None else ""],
+        ["status", s.status, ""],
+    ]
+    if s.eta_measured:
+        etas = ", ".join(f"{e:.4f}" for e in s.eta_measured[:8])
+        more = f", ... ({len(s.eta_measured)} in all)" if len(s.eta_measured) > 8 else ""
+        rows.append(["eta measured", etas + more, "(-)"])
+    if s.max_penetration is not None:
+        rows.append(["max penetration", f"{s.max_penetration * 1e3:.3g} mm", ""])
+    if s.max_sliding is not None:
+        rows.append(["max sliding", f"{s.max_sliding * 1e3:.3g} mm", ""])
+    rows.append(["cost", f"{c.wall_s:.3g} s wall",
+                 (f"({c.steps} steps, {c.sim_time:.4g} s simulated, real-time factor "
+                  f"{c.real_time_factor:.4g})")])
+    for name, value, note in rows:
+        print(f"{name:<18} {value} {note}".rstrip())
+    if files:
+        print(f"history: {files['history_csv']} ({len(result.history)} rows), "
+              f"events: {files['events_csv']} ({len(result.events)} rows)")
+    return 0
+
+
+def cmd_engines(args: argparse.Namespace) -> int:
+    from .engines import engine_info
+
+    rows = engine_info()
+    for r in rows:
+        r["package"] = _package_version("scipy" if r["name"] == "analytic" else r["name"])
+    if args.json:
+        _print_json(rows)
+        return 0
+    print(_table([[r["name"], _fmt(r["available"]), r.get("version") or r.get("reason", ""),
+                   r["package"] or "not installed"] for r in rows],
+                 ["backend", "imports", "engine version / reason", "package"]))
+    return 0
+
+
+def _package_version(dist: str) -> str | None:
+    try:
+        return f"{dist} {metadata.version(dist)}"
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def _compare_settings(engines: list[str] | None, args: argparse.Namespace) -> dict | None:
+    """Per-backend settings overrides {backend: {field: value}} for compare.
+
+    ``--setting name=value`` goes to every compared backend whose Settings has the field,
+    ``--setting backend.name=value`` to that backend only; ``--dt`` to every engine with a time
+    step (the analytic reference has none). A setting no compared backend has is an error.
+    """
+    if not args.settings and args.dt is None:
+        return None
+    from .engines import REGISTRY, available_backends, get_backend
+
+    names = list(dict.fromkeys(["analytic", *(engines if engines is not None
+                                               else available_backends())]))
+    targeted: list[tuple[str, str, str]] = []   # (backend or "", field, raw)
+    for key, raw in args.settings:
+        head, dot, tail = key.partition(".")
+        if dot and head in REGISTRY:
+            if head not in names:
+                raise ParameterError(f"--setting {key}", raw,
+                                     f"for a compared backend: {', '.join(names)}")
+            targeted.append((head, tail, raw))
+        else:
+            targeted.append(("", key, raw))
+    out: dict[str, dict[str, Any]] = {}
+    used: set[int] = set()
+    dt_used = False
+    for engine in names:
+        fields = {f.name for f in dataclasses.fields(get_backend(engine).Settings)}
+        mine = []
+        for i, (target, name, raw) in enumerate(targeted):
+            if target == engine or (target == "" and name in fields):
+                mine.append((name, raw))
+                used.add(i)
+        dt = args.dt if "dt" in fields else None
+        dt_used |= dt is not None
+        over = _backend_overrides(engine, argparse.Namespace(settings=mine, dt=dt))
+        if over:
+            out[engine] = over
+    for i, (target, name, raw) in enumerate(targeted):
+        if i not in used:
+            raise ParameterError(f"--setting {name}", raw,
+                                 f"a settings field of one of {', '.join(names)}")
+    if args.dt is not None and not dt_used:
+        raise ParameterError("--dt", args.dt, "omitted: none of the compared backends has a "
+                             "time step")
+    return out
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    try:
+        from .compare import compare
+    except ImportError as e:
+        raise RockbenchError(f"the compare command is unavailable: {e}") from None
+
+    write_case_report = None
+    if args.report:
+        try:
+            from .report import write_case_report
+        except ImportError as e:
+            raise RockbenchError(f"--report is unavailable: {e}") from None
+    scene = _load_scene(args)
+    if args.engines is not None:
+        from .engines import get_backend
+
+        for name in args.engines:
+            get_backend(name)  # unknown names fail here, naming the engine
+    motion, phi0 = _motion(args, scene)
+    settings = _compare_settings(args.engines, args)
+    comparison = compare(scene, motion, engines=args.engines, phi0=phi0,
+                         duration=args.duration, settings=settings,
+                         progress=sys.stderr.isatty() and not args.json)
+    table = comparison.table
+    report_path = csv_path = None
+    if args.csv:
+        csv_path = Path(args.csv)
+        csv_path.parent.mkdir(parents=True, exist_ok=True)
+        table.to_csv(csv_path, index=False)
+    if write_case_report is not None:
+        report_path = write_case_report(comparison, args.report)
+    if args.json:
+        data = {"scene": scene.name, "motion": comparison.motion, "phi0": comparison.phi0,
+                "table": table.to_dict(orient="records"),
+                "eta": comparison.eta.to_dict(orient="records")}
+        if csv_path:
+            data["csv"] = str(csv_path)
+        if report_path:
+            data["report"] = str(report_path)
+        _print_json(data)
+        return 0
+    print(f"{scene.name}: {_describe_motion(motion, phi0, scene.alpha)}")
+    cols = [c for c in COMPARE_COLUMNS if c in table.columns]
+    with _pandas_display():
+        print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    print("units: max_abs_phi_over_alpha, peak_rel_error, nrmse, eta_max_rel_error: -; "
+          "max_penetration, max_sliding: m; wall_s: s; real_time_factor: simulated s per wall s")
+    if csv_path:
+        print(f"table: {csv_path}")
+    if report_path:
+        print(f"report: {report_path}")
+    return 0
+
+
+def _pandas_display():
+    import pandas as pd
+
+    return pd.option_context("display.width", 200, "display.max_columns", 50)
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    try:
+        from .report import run_campaign
+    except ImportError as e:
+        raise RockbenchError(f"the report command is unavailable: {e}") from None
+
+    if args.records is not None and not Path(args.records).is_dir():
+        raise ParameterError("--records", args.records, "an existing folder of record files")
+    if args.engines is not None:
+        from .engines import get_backend
+
+        for name in args.engines:
+            get_backend(name)
+    kwargs: dict[str, Any] = {"engines": args.engines, "records_dir": args.records,
+                              "quick": args.quick, "store": args.store}
+    if args.dask is not None:
+        kwargs.update(executor="dask", dask_address=args.dask)
+    if args.workers is not None:
+        params = inspect.signature(run_campaign).parameters
+        if "workers" not in params and not any(
+                q.kind is inspect.Parameter.VAR_KEYWORD for q in params.values()):
+            raise ParameterError("--workers", args.workers,
+                                 "omitted (this version of run_campaign has no workers option)")
+        kwargs["workers"] = args.workers
+    path = run_campaign(args.out, **kwargs)
+    print(f"report: {path}")
+    return 0
+
+
+COMMANDS = {"scenes": cmd_scenes, "info": cmd_info, "run": cmd_run, "engines": cmd_engines,
+            "compare": cmd_compare, "report": cmd_report}
+
+
+# ==============================================================================================
+def _one_line(message: str) -> str:
+    return " ".join(str(message).split())
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line with ``argv`` (default ``sys.argv[1:]``); return the exit code:
+    0 success, 2 bad input (one line ``rockbench: error: ...`` on stderr), 130 interrupted,
+    141 output pipe closed early."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(None if argv is None else list(argv))
+    except CommandLineError as e:
+        print(f"{PROG}: error: {_one_line(e)}", file=sys.stderr)
+        return 2
+    except SystemExit as e:  # --help, --version
+        return e.code if isinstance(e.code, int) else 0
+    try:
+        return COMMANDS[args.command](args)
+    except RockbenchError as e:
+        print(f"{PROG}: error: {_one_line(e)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # output piped into e.g. `head`, which exited early
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes stdout
+        except (OSError, ValueError):
+            pass
+        return 141

@@ -1,0 +1,276 @@
+"""PyBullet (Bullet 3) backend: the 3-D engine kept in the plane by joint chains.
+
+Mapping. rockbench's plane x-y is Bullet's x-z plane (Bullet's gravity acts along -z); the
+out-of-plane axis is Bullet's y. Each rockbench body is one Bullet multibody with a fixed,
+shapeless base at the world origin and a chain of three joints:
+
+    base --prismatic x--> virtual link --prismatic z--> virtual link --revolute (0,-1,0)--> body
+
+so the joint coordinates *are* the body's planar pose: q0 = x [m], q1 = y [m], q2 = theta [rad]
+(the revolute axis points along -y, so a positive joint angle is counterclockwise in rockbench's
+x-y plane), and the joint velocities are vx, vy [m/s] and omega [rad/s]. A free 6-dof body
+does not stay planar in Bullet (``shared/notes/engines.md``); the chain does, exactly. The last
+link carries the box collision shape and the body's TRUE mass and in-plane inertia from the
+scene (the beam's is m rho^2, not the box's); its out-of-plane inertias are the box's (they never
+act: the chain locks those rotations). The virtual links weigh ``virtual_mass_ratio`` times the
+body's mass, sit at its centre of mass and so only scale its translational mass by
+(1 + 2 ratio) (1e-6: far below every tolerance). The joints' default velocity motors are
+disabled (VELOCITY_CONTROL, force 0), and so are Bullet's multibody linear/angular damping
+(0.04 by default: they would dissipate energy) and joint damping.
+
+Foundation: static boxes (ground, and the step under the right column), so that every contact
+is box-box (Bullet's exact box-box detector, no rounded margins).
+
+Contacts and friction. Bullet MULTIPLIES the two bodies' lateral friction coefficients (and
+clamps the product at 10): every body and the foundation get sqrt(settings.friction), so that
+every pair has exactly ``settings.friction``. Restitution 0 on everything (also multiplied).
+Friction anchors on. The contact breaking threshold, solver iterations, contact ERP and the
+optional explicit contact stiffness/damping are settings (defaults measured: see
+``docs/engines/pybullet.md``).
+
+Ground motion: gravity (gravity_x, 0, -g) set before every step. Device forces (tendons,
+dampers) from the shared machinery, applied with ``applyExternalForce(..., WORLD_FRAME)`` on
+the body link before every step (Bullet clears external forces after each step).
+
+Isolation: every run opens its own DIRECT physics client (``pybullet.connect(pybullet.DIRECT)``)
+and passes its id to every call; ``_close`` disconnects it. Two runs in one process do not
+share state, and a run is repeatable bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..constants import G
+from ..errors import ParameterError
+from .base import EngineBackend, EngineSettings, PointForce
+
+__all__ = ["PybulletBackend", "PybulletSettings"]
+
+#: Bullet clamps the product of two friction coefficients at this value
+#: (btManifoldResult::calculateCombinedFriction, MAX_FRICTION).
+_BULLET_MAX_FRICTION = 10.0
+
+
+@dataclass(frozen=True)
+class PybulletSettings(EngineSettings):
+    """PyBullet settings (see ``docs/engines/pybullet.md`` for the measurements behind them).
+
+    solver_iterations : constraint solver iterations per step (Bullet default 50), integer >= 1.
+    contact_erp : error reduction parameter of contacts, in (0, 1] (the fraction of penetration
+        removed per step; pybullet's default 0.2 for multibody contacts). Used when
+        ``contact_stiffness`` is 0.
+    contact_stiffness, contact_damping : explicit contact stiffness [N/m] and damping [N s/m]
+        (Bullet turns them into a per-contact ERP/CFM); 0 and 0 (the default) keep Bullet's
+        rigid contact with ``contact_erp``. Both > 0 or both 0.
+    contact_breaking_threshold : distance [m] within which Bullet keeps (and creates) contact
+        points (Bullet default 0.02 m biased the response; 1e-3 m), in (0, 0.05].
+    friction_anchor : keep the friction anchor of persistent contact points (removes pivot
+        creep), bool.
+    solver : "si" (sequential impulse, Bullet's default; the only one that works here: LCP_PGS
+        gives NaN) or "dantzig".
+    virtual_mass_ratio : mass of each of the two virtual links of the planar joint chain as a
+        fraction of the body's mass, in (0, 1e-3].
+    """
+
+    solver_iterations: int = 50
+    contact_erp: float = 0.2
+    contact_stiffness: float = 0.0
+    contact_damping: float = 0.0
+    contact_breaking_threshold: float = 1e-3
+    friction_anchor: bool = True
+    solver: str = "si"
+    virtual_mass_ratio: float = 1e-6
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        it = self.solver_iterations
+        if isinstance(it, bool) or not isinstance(it, (int, np.integer)) or it < 1:
+            raise ParameterError("solver_iterations", it, "an integer >= 1")
+        if not (isinstance(self.contact_erp, (int, float)) and 0.0 < self.contact_erp <= 1.0):
+            raise ParameterError("contact_erp", self.contact_erp, "in (0, 1]")
+        for nm in ("contact_stiffness", "contact_damping"):
+            v = getattr(self, nm)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0.0):
+                raise ParameterError(nm, v, ">= 0 (0 and 0: Bullet's rigid contact)")
+        if (self.contact_stiffness > 0.0) != (self.contact_damping > 0.0):
+            raise ParameterError("contact_damping", self.contact_damping,
+                                 "> 0 when contact_stiffness > 0, and 0 when it is 0")
+        cbt = self.contact_breaking_threshold
+        if not (isinstance(cbt, (int, float)) and 0.0 < cbt <= 0.05):
+            raise ParameterError("contact_breaking_threshold", cbt, "in (0, 0.05] m")
+        if not isinstance(self.friction_anchor, (bool, np.bool_)):
+            raise ParameterError("friction_anchor", self.friction_anchor, "True or False")
+        if self.solver not in _SOLVERS:
+            raise ParameterError("solver", self.solver, f"one of {', '.join(_SOLVERS)}")
+        vm = self.virtual_mass_ratio
+        if not (isinstance(vm, (int, float)) and 0.0 < vm <= 1e-3):
+            raise ParameterError("virtual_mass_ratio", vm, "in (0, 1e-3]")
+        if self.friction > _BULLET_MAX_FRICTION:
+            raise ParameterError("friction", self.friction,
+                                 f"<= {_BULLET_MAX_FRICTION:g} (Bullet clamps the pair's product)")
+
+
+#: settings.solver -> name of the pybullet constant
+_SOLVERS = {"si": "CONSTRAINT_SOLVER_LCP_SI", "dantzig": "CONSTRAINT_SOLVER_LCP_DANTZIG"}
+
+
+class PybulletBackend(EngineBackend):
+    """The scene in PyBullet (DIRECT client per run, planar joint chains, box contacts)."""
+
+    name: ClassVar[str] = "pybullet"
+    Settings: ClassVar[type] = PybulletSettings
+
+    @classmethod
+    def available(cls) -> tuple[bool, str]:
+        try:
+            import pybullet
+        except Exception as e:  # pragma: no cover - depends on the machine
+            return False, f"pybullet does not import: {e}"
+        try:
+            from importlib.metadata import version
+            v = version("pybullet")
+        except Exception:  # pragma: no cover - metadata missing
+            v = "unknown"
+        return True, f"pybullet {v} (Bullet API {pybullet.getAPIVersion()})"
+
+    # --- building -----------------------------------------------------------------------------
+    def _build(self) -> None:
+        import pybullet as pb
+
+        cfg = self.settings
+        self._pb = pb
+        self._cid = pb.connect(pb.DIRECT)
+        if self._cid < 0:
+            raise RuntimeError("pybullet could not open a DIRECT physics client")
+        cid = self._cid
+        pb.resetSimulation(physicsClientId=cid)
+        pb.setPhysicsEngineParameter(
+            fixedTimeStep=float(cfg.dt), numSubSteps=0,
+            numSolverIterations=int(cfg.solver_iterations),
+            contactERP=float(cfg.contact_erp),
+            contactBreakingThreshold=float(cfg.contact_breaking_threshold),
+            constraintSolverType=getattr(pb, _SOLVERS[cfg.solver]),
+            deterministicOverlappingPairs=1,
+            restitutionVelocityThreshold=0.0,
+            physicsClientId=cid)
+        pb.setGravity(0.0, 0.0, -G, physicsClientId=cid)
+        mu = math.sqrt(float(cfg.friction))   # Bullet multiplies the two coefficients
+        self._mu = mu
+
+        # foundation: static boxes, top of the ground at z = 0
+        fd = self.foundation
+        depth = max(sp.depth for sp in self.specs)
+        thick = 1.0
+        boxes = [(0.5 * (fd.x_min + fd.x_max), 0.5 * (fd.x_max - fd.x_min), 0.0)]
+        if fd.step_x0 is not None:
+            boxes.append((0.5 * (fd.step_x0 + fd.step_x1), 0.5 * (fd.step_x1 - fd.step_x0),
+                          fd.step_height))
+        self._static = []
+        for xc, hx, top in boxes:
+            shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[hx, 2.0 * depth, thick],
+                                            physicsClientId=cid)
+            bid = pb.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
+                                     basePosition=[xc, 0.0, top - thick],
+                                     physicsClientId=cid)
+            pb.changeDynamics(bid, -1, lateralFriction=mu, restitution=0.0,
+                              spinningFriction=0.0, rollingFriction=0.0,
+                              frictionAnchor=bool(cfg.friction_anchor),
+                              contactProcessingThreshold=float(cfg.contact_breaking_threshold),
+                              physicsClientId=cid)
+            self._set_contact(bid, -1)
+            self._static.append(bid)
+
+        # bodies: fixed base, prismatic x, prismatic z, revolute about -y
+        self._bodies = []
+        for sp, pose in zip(self.specs, self.poses0):
+            self._bodies.append(self._make_body(sp, pose))
+
+    def _set_contact(self, bid: int, link: int) -> None:
+        cfg = self.settings
+        if cfg.contact_stiffness > 0.0:
+            self._pb.changeDynamics(bid, link, contactStiffness=float(cfg.contact_stiffness),
+                                    contactDamping=float(cfg.contact_damping),
+                                    physicsClientId=self._cid)
+
+    def _make_body(self, sp, pose) -> int:
+        pb, cid, cfg = self._pb, self._cid, self.settings
+        hw, hh, hd = sp.half_width, sp.half_height, 0.5 * sp.depth
+        shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[hw, hd, hh],
+                                        physicsClientId=cid)
+        m_v = cfg.virtual_mass_ratio * sp.mass
+        i_v = cfg.virtual_mass_ratio * sp.inertia
+        # out-of-plane inertias of the box (locked by the chain); in-plane: the scene's
+        ixx = sp.mass * (hd ** 2 + hh ** 2) / 3.0
+        izz = sp.mass * (hw ** 2 + hd ** 2) / 3.0
+        bid = pb.createMultiBody(
+            baseMass=0.0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=-1,
+            basePosition=[0.0, 0.0, 0.0], baseOrientation=[0.0, 0.0, 0.0, 1.0],
+            linkMasses=[m_v, m_v, sp.mass],
+            linkCollisionShapeIndices=[-1, -1, shape],
+            linkVisualShapeIndices=[-1, -1, -1],
+            linkPositions=[[0.0, 0.0, 0.0]] * 3,
+            linkOrientations=[[0.0, 0.0, 0.0, 1.0]] * 3,
+            linkInertialFramePositions=[[0.0, 0.0, 0.0]] * 3,
+            linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]] * 3,
+            linkParentIndices=[0, 1, 2],
+            linkJointTypes=[pb.JOINT_PRISMATIC, pb.JOINT_PRISMATIC, pb.JOINT_REVOLUTE],
+            linkJointAxis=[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]],
+            useMaximalCoordinates=False,
+            physicsClientId=cid)
+        if bid < 0:
+            raise RuntimeError(f"pybullet could not create body {sp.name!r}")
+        # mass= with localInertiaDiagonal= always (without it Bullet zeroes the mass)
+        for link, (m, inertia) in enumerate(((m_v, (i_v, i_v, i_v)),
+                                             (m_v, (i_v, i_v, i_v)),
+                                             (sp.mass, (ixx, sp.inertia, izz)))):
+            pb.changeDynamics(bid, link, mass=m, localInertiaDiagonal=list(inertia),
+                              physicsClientId=cid)
+        pb.changeDynamics(bid, -1, linearDamping=0.0, angularDamping=0.0,
+                          physicsClientId=cid)
+        for link in range(3):
+            pb.changeDynamics(bid, link, jointDamping=0.0, lateralFriction=self._mu,
+                              restitution=0.0, spinningFriction=0.0, rollingFriction=0.0,
+                              frictionAnchor=bool(cfg.friction_anchor),
+                              contactProcessingThreshold=float(cfg.contact_breaking_threshold),
+                              physicsClientId=cid)
+            pb.setJointMotorControl2(bid, link, pb.VELOCITY_CONTROL, targetVelocity=0.0,
+                                     force=0.0, physicsClientId=cid)
+        self._set_contact(bid, 2)
+        for j, q in enumerate(pose):
+            pb.resetJointState(bid, j, targetValue=float(q), targetVelocity=0.0,
+                               physicsClientId=cid)
+        return bid
+
+    # --- stepping -----------------------------------------------------------------------------
+    def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
+        pb, cid = self._pb, self._cid
+        pb.setGravity(float(gravity_x), 0.0, -G, physicsClientId=cid)
+        for f in forces:
+            pb.applyExternalForce(self._bodies[f.body], 2, [f.fx, 0.0, f.fy],
+                                  [f.px, 0.0, f.py], pb.WORLD_FRAME, physicsClientId=cid)
+        pb.stepSimulation(physicsClientId=cid)
+
+    def _state(self) -> np.ndarray:
+        pb, cid = self._pb, self._cid
+        out = np.empty((len(self._bodies), 6))
+        for i, bid in enumerate(self._bodies):
+            js = pb.getJointStates(bid, (0, 1, 2), physicsClientId=cid)
+            out[i, 0:3] = (js[0][0], js[1][0], js[2][0])
+            out[i, 3:6] = (js[0][1], js[1][1], js[2][1])
+        return out
+
+    def _close(self) -> None:
+        cid = getattr(self, "_cid", None)
+        if cid is not None and cid >= 0:
+            try:
+                if self._pb.isConnected(physicsClientId=cid):
+                    self._pb.disconnect(physicsClientId=cid)
+            finally:
+                self._cid = None
+        self._bodies = []
+        self._static = []

@@ -1,0 +1,329 @@
+"""Reports: the case page and the quick campaign (analytic + pymunk).
+
+Checks that the pages are self-contained (no external resource, every image embedded and
+decodable), that the CSV files carry the documented columns, that the conclusions quote the
+numbers of the tables, that the agreement thresholds are the documented ones, and physics on
+the way (pymunk agrees with the analytic model on the cases used).
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import re
+import struct
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import rockbench as rb
+from rockbench.compare import ETA_COLUMNS, METRIC_COLUMNS, compare
+from rockbench.report import figures as F
+from rockbench.report import html as H
+from rockbench.report import run_campaign, write_case_report
+from rockbench.report import campaign as C
+
+ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+def _need_pymunk():
+    if "pymunk" not in rb.available_backends():
+        pytest.skip("pymunk is not installed")
+
+
+# ------------------------------------------------------------------------------------------
+# helpers
+# ------------------------------------------------------------------------------------------
+_EXTERNAL = re.compile(r"""(?:src|href|action|poster|data)\s*=\s*["']?\s*(?:https?:)?//""",
+                       re.IGNORECASE)
+_CSS_URL = re.compile(r"""url\(\s*["']?\s*(?:https?:)?//""", re.IGNORECASE)
+_IMG = re.compile(r"<img\b[^>]*>", re.IGNORECASE)
+_SRC = re.compile(r"""src="([^"]*)\"""")
+
+
+def png_size(data: bytes) -> tuple[int, int]:
+    """(width, height) [px] from a PNG's IHDR chunk (asserts the PNG signature)."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
+    assert data[12:16] == b"IHDR"
+    return struct.unpack(">II", data[16:24])
+
+
+def assert_self_contained(page: str) -> int:
+    """No external resource; every <img> carries a decodable PNG data URI. Returns the number
+    of images."""
+    assert not _EXTERNAL.search(page), _EXTERNAL.search(page).group(0)
+    assert not _CSS_URL.search(page)
+    assert "<script" not in page.lower()         # the published page needs no script
+    imgs = _IMG.findall(page)
+    for tag in imgs:
+        src = _SRC.search(tag).group(1)
+        assert src.startswith("data:image/png;base64,"), src[:40]
+        w, h = png_size(base64.b64decode(src.split(",", 1)[1]))
+        assert w > 100 and h > 100
+    return len(imgs)
+
+
+def conclusion_text(page: str) -> str:
+    m = re.search(r'<div id="conclusion">(.*?)</div>', page, re.S)
+    assert m, "no conclusion"
+    import html
+    return html.unescape(re.sub(r"<[^>]+>", " ", m.group(1)))
+
+
+# ------------------------------------------------------------------------------------------
+# one case
+# ------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def case():
+    _need_pymunk()
+    scene = rb.load_scene("paper-asymmetric")
+    pulse = rb.RickerPulse.dimensionless(A=3.0, W=4.0, structure=scene.structure)
+    return compare(scene, pulse, engines=["pymunk"], duration=9.0)
+
+
+@pytest.fixture(scope="module")
+def case_page(case, tmp_path_factory):
+    out = tmp_path_factory.mktemp("case")
+    path = write_case_report(case, out)
+    return path, path.read_text(encoding="utf-8")
+
+
+def test_case_report_is_self_contained(case_page):
+    path, page = case_page
+    assert path.name == "index.html" and path.is_file()
+    assert assert_self_contained(page) == 2           # histories + eta
+    assert (path.parent / "figures" / "histories.png").is_file()
+    assert png_size((path.parent / "figures" / "eta.png").read_bytes())[0] > 100
+
+
+def test_case_csvs_have_documented_columns(case, case_page):
+    d = case_page[0].parent
+    m = pd.read_csv(d / "metrics.csv")
+    assert list(m.columns) == list(METRIC_COLUMNS)
+    assert list(m["backend"]) == ["analytic", "pymunk"]
+    e = pd.read_csv(d / "eta.csv")
+    assert list(e.columns) == list(ETA_COLUMNS)
+    h = pd.read_csv(d / "history.csv")
+    assert list(h.columns) == ["backend", "t", "phi", "phidot", "ground_acc", "mode"]
+    # the CSV holds the comparison's numbers, and they are physics: the reference has no error
+    ref = m[m["backend"] == "analytic"].iloc[0]
+    assert ref["nrmse"] == 0.0 and ref["peak_rel_error"] == 0.0
+    pm = m[m["backend"] == "pymunk"].iloc[0]
+    assert math.isclose(pm["nrmse"], case.table.loc[1, "nrmse"], rel_tol=1e-12)
+    # pymunk rocks the asymmetric frame like the analytic model under this pulse
+    assert abs(pm["peak_rel_error"]) < 0.03 and pm["nrmse"] < 0.05
+    assert bool(pm["verdict_agrees"])
+    # every impact's reference eta is the analytic eta of its direction
+    info = rb.info(case.scene)
+    for d_, col in ((1, "eta_ccw"), (-1, "eta_cw")):
+        assert np.allclose(e.loc[e["direction"] == d_, "eta_ref"], info[col])
+
+
+def test_case_conclusion_quotes_the_table(case, case_page):
+    text = conclusion_text(case_page[1])
+    t = case.table.set_index("backend")
+    pm, ref = t.loc["pymunk"], t.loc["analytic"]
+    assert "Closest to the analytic model: pymunk" in text
+    assert f"nrmse {pm['nrmse']:.3g}" in text
+    assert f"{100 * pm['peak_rel_error']:+.2f} %" in text
+    assert f"Fastest engine: pymunk at a real-time factor of {pm['real_time_factor']:.3g}" \
+        in text
+    assert f"analytic reference ran at {ref['real_time_factor']:.3g}" in text
+    m, r = pm["eta_ccw_mean"], pm["eta_ccw_ref"]
+    assert f"{m:.4f} counterclockwise against {r:.4f} ({100 * (m / r - 1):+.2f} %)" in text
+    assert "the structure does not overturn" in text
+
+
+def test_case_conclusion_reports_disagreements(case):
+    t = case.table.copy()
+    i = t.index[t["backend"] == "pymunk"][0]
+    t.loc[i, "overturned"] = True
+    t.loc[i, "verdict_agrees"] = False
+    t.loc[i, "max_sliding"] = 0.02
+    bad = t.loc[[i]].assign(backend="mujoco", status="diverged", reason="NaN in the state")
+    text = " ".join(H.case_conclusion(pd.concat([t, bad], ignore_index=True)))
+    assert "pymunk overturns where the analytic model survives" in text
+    assert "pymunk slid by up to 20 mm" in text
+    assert "mujoco did not finish cleanly (diverged): NaN in the state" in text
+    assert "Every engine that ran agrees" not in text
+
+
+def test_grades_and_documented_thresholds():
+    assert F.grade("nrmse", 0.004) == "good"
+    assert F.grade("nrmse", 0.03) == "fair"
+    assert F.grade("nrmse", 0.2) == "poor"
+    assert F.grade("peak_rel_error", -0.02) == "good"          # absolute value
+    assert F.grade("nrmse", float("nan")) == "na"
+    assert F.grade("verdict_agrees", False) == "poor"
+    assert F.grade("status", "diverged") == "poor"
+    assert F.grade("backend", "pymunk") == "na"
+    doc = (ROOT / "docs" / "report.md").read_text(encoding="utf-8")
+    for metric, (good, fair) in F.THRESHOLDS.items():
+        row = next((ln for ln in doc.splitlines() if ln.startswith(f"| `{metric}`")), None)
+        assert row is not None, f"docs/report.md has no threshold row for {metric}"
+        cells = [c.strip() for c in row.split("|")]
+        assert float(cells[3].lstrip("<= ")) == good, metric
+        assert float(cells[4].lstrip("<= ")) == fair, metric
+
+
+def _labels_ok(fig):
+    """Every visible axes has a y label with a unit in brackets, and an x label with a unit
+    (or naming categories), unless it shares its x axis with a labelled one."""
+    axes = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
+    assert axes
+    for ax in axes:
+        assert "[" in ax.get_ylabel(), f"y axis without unit: {ax.get_ylabel()!r}"
+        xl = ax.get_xlabel()
+        if not xl:
+            sib = [o for o in ax.get_shared_x_axes().get_siblings(ax) if o is not ax]
+            assert any("[" in o.get_xlabel() for o in sib), "unlabelled x axis"
+        else:
+            assert "[" in xl or xl in ("backend", "ground-motion record"), xl
+
+
+def test_figures_label_axes_with_units(case):
+    _labels_ok(F.plot_histories(case.results, alpha=case.scene.alpha))
+    _labels_ok(F.plot_eta(case.eta))
+    speed = pd.DataFrame({"backend": ["pymunk"] * 2, "dt": [1e-3, 5e-4],
+                          "real_time_factor": [100.0, 50.0], "nrmse": [0.02, 0.01]})
+    _labels_ok(F.plot_speed_accuracy(speed))
+    omap = pd.DataFrame({"backend": ["analytic", "pymunk"], "A": [2.0, 2.0], "W": [3.0, 3.0],
+                         "overturned": [False, True], "status": ["ok", "ok"]})
+    fig = F.plot_overturn_maps(omap)
+    _labels_ok(fig)
+    assert "1 of 1 verdicts differ" in fig.axes[1].get_title()
+    with pytest.raises(rb.ParameterError, match="alpha"):
+        F.plot_histories(case.results, alpha=0.0)
+
+
+# ------------------------------------------------------------------------------------------
+# records folders
+# ------------------------------------------------------------------------------------------
+def _write_record_folder(d: Path) -> None:
+    """One headerless record (listed in records.csv, cm/s^2) and one stray file."""
+    t = np.arange(0.0, 2.0, 0.01)
+    acc = 400.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-((t - 1.0) / 0.4) ** 2)   # cm/s^2
+    lines = [" ".join(f"{v:.5f}" for v in acc[i:i + 6]) for i in range(0, len(acc), 6)]
+    (d / "REC1.dat").write_text("\n".join(lines) + "\n")
+    (d / "stray.dat").write_text("1 2 3\n")
+    (d / "records.csv").write_text("record,npts,dt_s,units\nREC1,200,0.01,cm/s^2 (scaled)\n")
+
+
+def test_find_records(tmp_path):
+    _write_record_folder(tmp_path)
+    recs, notes = C.find_records(tmp_path)
+    assert [(r["name"], r["dt"], r["units"]) for r in recs] == [("REC1", 0.01, "cm/s2")]
+    assert any("stray.dat" in n for n in notes)
+    with pytest.raises(rb.ParameterError, match="records_dir"):
+        C.find_records(tmp_path / "missing")
+
+
+# ------------------------------------------------------------------------------------------
+# the quick campaign (analytic + pymunk)
+# ------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    _need_pymunk()
+    pytest.importorskip("pyarrow")
+    out = tmp_path_factory.mktemp("campaign")
+    recs = tmp_path_factory.mktemp("records")
+    _write_record_folder(recs)
+    path = run_campaign(out, engines=["pymunk"], quick=True, progress=False,
+                        records_dir=recs, executor="serial")
+    return path, path.read_text(encoding="utf-8")
+
+
+def test_quick_campaign_page(quick):
+    path, page = quick
+    n = assert_self_contained(page)
+    figs = sorted(p.name for p in (path.parent / "figures").glob("*.png"))
+    assert figs == sorted(["summary_table.png", "histories_paper-asymmetric.png",
+                           "histories_paper-asymmetric-hybrid-eps1.png", "eta_free_rocking.png",
+                           "eta_per_impact.png", "speed_accuracy.png", "overturning_map.png",
+                           "record_peaks.png"])
+    assert n == len(figs)
+    for p in (path.parent / "figures").glob("*.png"):
+        assert png_size(p.read_bytes())[0] > 100
+
+
+def test_quick_campaign_tables(quick):
+    d = quick[0].parent
+    documented = {name: [c for c in cols if c != "(then)"]
+                  for name, cols in C.CAMPAIGN_COLUMNS.items()}
+    m = pd.read_csv(d / "metrics.csv")
+    assert list(m.columns) == documented["metrics.csv"] + list(METRIC_COLUMNS)
+    assert set(m["part"]) == {"pulse", "free"}
+    e = pd.read_csv(d / "eta.csv")
+    assert list(e.columns) == documented["eta.csv"] + list(ETA_COLUMNS)
+    for name in ("eta_summary.csv", "engines.csv", "speed_accuracy.csv"):
+        df = pd.read_csv(d / name)
+        assert set(documented[name]) <= set(df.columns), name
+    for name in ("overturning_map.csv", "record_peaks.csv"):
+        df = pd.read_csv(d / name)
+        assert set(documented[name]) <= set(df.columns), name
+    # physics: pymunk keeps the analytic verdict on the map, its free-rocking eta of the
+    # free-standing frame is within 2 % of the analytic eta, and a smaller dt is not worse
+    omap = pd.read_csv(d / "overturning_map.csv")
+    assert len(omap) == 8 and omap["verdict_agrees"].all()
+    assert omap.loc[omap["backend"] == "analytic", "overturned"].any()
+    es = pd.read_csv(d / "eta_summary.csv")
+    free = es[(es["scene"] == "paper-asymmetric") & (es["backend"] == "pymunk")]
+    assert len(free) == 2 and (free["rel_error"].abs() < 0.02).all()
+    sp = pd.read_csv(d / "speed_accuracy.csv").sort_values("dt")
+    assert list(sp["dt"]) == [5e-4, 1e-3] and (sp["status"] == "ok").all()
+    assert sp["steps"].iloc[0] > 1.9 * sp["steps"].iloc[1]
+    rec = pd.read_csv(d / "record_peaks.csv")
+    assert len(rec) == 2 * 2 * 2                        # 2 frames x 2 polarities x 2 backends
+    assert set(rec["polarity"]) == {1, -1} and set(rec["record"]) == {"REC1"}
+
+
+def test_quick_campaign_conclusion_quotes_the_tables(quick):
+    path, page = quick
+    text = conclusion_text(page)
+    eng = pd.read_csv(path.parent / "engines.csv").set_index("backend")
+    pm = eng.loc["pymunk"]
+    assert (f"Closest to the analytic model: pymunk, median nrmse {pm['nrmse_median']:.3g} "
+            f"over {int(pm['n_ok'])} pulse cases") in text
+    assert f"median real-time factor {pm['real_time_factor_median']:.3g}" in text
+    assert "agrees with every analytic verdict" in text
+    es = pd.read_csv(path.parent / "eta_summary.csv")
+    mean = es.loc[es["backend"] == "pymunk", "rel_error"].abs().mean()
+    assert f"off the analytic eta by {100 * mean:.2f} %" in text
+
+
+def test_quick_campaign_resumes_from_its_store(quick, monkeypatch):
+    """A rerun reuses every finished case: nothing runs again and the tables are identical."""
+    path, _ = quick
+    before = pd.read_csv(path.parent / "metrics.csv")
+
+    def boom(*a, **k):
+        raise AssertionError("a finished case ran again")
+
+    import rockbench.sweep as S
+    monkeypatch.setattr(C, "_run_job", boom)
+    monkeypatch.setattr(S, "run_case", boom)
+    run_campaign(path.parent, engines=["pymunk"], quick=True, progress=False,
+                 executor="serial", records_dir=_records_of(path))
+    after = pd.read_csv(path.parent / "metrics.csv")
+    cols = [c for c in after.columns if c not in ("wall_s", "real_time_factor")]
+    pd.testing.assert_frame_equal(before[cols], after[cols])
+
+
+def _records_of(page_path: Path) -> str:
+    """The records folder the quick campaign used (named on its page)."""
+    page = page_path.read_text(encoding="utf-8")
+    m = re.search(r"<dt>records folder</dt><dd>([^<]*)</dd>", page)
+    return m.group(1)
+
+
+def test_campaign_bad_input(tmp_path):
+    with pytest.raises(rb.ParameterError, match="engines"):
+        run_campaign(tmp_path, engines=["nosuch"], quick=True, progress=False)
+    with pytest.raises(rb.ParameterError, match="executor"):
+        run_campaign(tmp_path, quick=True, progress=False, executor="threads")
+    with pytest.raises(rb.ParameterError, match="records_dir"):
+        run_campaign(tmp_path, engines=["analytic"], quick=True, progress=False,
+                     records_dir=tmp_path / "missing", executor="serial")

@@ -1,0 +1,246 @@
+"""rockbench.sweep: cases, executors, the resumable store, grids and maps."""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import rockbench as rb
+from rockbench import sweep
+from rockbench.engines import REGISTRY, available_backends
+from rockbench.engines.analytic import AnalyticBackend
+from rockbench.sweep import (TIMING_COLUMNS, case_id, load_store, normalize_case, overturn_map,
+                             pulse_grid, run_cases)
+
+ENGINES = ["analytic"] + (["pymunk"] if "pymunk" in available_backends() else [])
+BAD = {"scene": "no-such-scene", "engine": "analytic", "motion": None, "phi0": 0.1}
+
+
+def _grid():
+    """4 small cases (+ pymunk's 4 when installed): the block under short pulses."""
+    return pulse_grid("housner-block", "symmetric", [1, -1], [3.0], [4.0, 6.0], ENGINES,
+                      duration=3.0)
+
+
+def _physics(df: pd.DataFrame) -> pd.DataFrame:
+    return df[[c for c in df.columns if c not in TIMING_COLUMNS]]
+
+
+# --- cases -----------------------------------------------------------------------------------
+def test_case_id_is_stable_and_normalized():
+    case = {"scene": "housner-block", "engine": "pymunk", "duration": 2,
+            "motion": {"kind": "ricker", "shape": "symmetric", "sign": 1, "A": 3, "W": 4}}
+    same = {"motion": {"W": np.float64(4.0), "A": 3.0, "sign": 1, "shape": "symmetric",
+                       "kind": "ricker"},
+            "duration": 2.0, "engine": "pymunk", "scene": "housner-block", "overrides": None,
+            "settings": {}, "phi0": 0}
+    # a literal: changing the normalization would orphan every existing store
+    assert case_id(case) == case_id(same) == "8b125b69c84ba2b2"
+    other = dict(case, motion=dict(case["motion"], A=3.01))
+    assert case_id(other) != case_id(case)
+    n = normalize_case(case)
+    assert n["overrides"] == {} and n["settings"] == {} and n["phi0"] == 0.0
+
+
+@pytest.mark.parametrize("bad, name", [
+    ({"scene": "housner-block", "colour": "red"}, "colour"),
+    ({"scene": "housner-block", "engine": "nope"}, "engine"),
+    ({"engine": "analytic"}, "scene"),
+    ({"scene": "housner-block", "motion": {"kind": "ricker", "A": 3.0}}, "motion"),
+    ({"scene": "housner-block", "motion": {"kind": "wave"}}, "motion.kind"),
+    ({"scene": "housner-block", "motion": {"kind": "record", "dt": 0.01}}, "motion.path"),
+    ({"scene": "housner-block", "duration": -1.0}, "duration"),
+])
+def test_malformed_cases_raise_parameter_error(bad, name):
+    with pytest.raises(rb.ParameterError, match=name.replace(".", r"\.")):
+        normalize_case(bad)
+
+
+def test_bad_options_raise_parameter_error():
+    with pytest.raises(rb.ParameterError, match="executor"):
+        run_cases([], executor="threads")
+    with pytest.raises(rb.ParameterError, match="workers"):
+        run_cases([], workers=0)
+    with pytest.raises(rb.ParameterError, match="dask_address"):
+        run_cases([], executor="serial", dask_address="tcp://x:1")
+
+
+# --- executors -----------------------------------------------------------------------------
+def test_serial_and_process_pool_give_identical_rows():
+    cases = _grid() + [BAD]
+    serial = run_cases(cases, executor="serial", progress=False)
+    pool = run_cases(cases, executor="process", workers=2, progress=False)
+    assert len(serial) == len(cases)
+    assert list(serial["case_id"]) == [case_id(c) for c in cases]
+    pd.testing.assert_frame_equal(_physics(serial), _physics(pool))
+    ok = serial[serial["status"] == "ok"]
+    assert len(ok) == len(cases) - 1
+    # physics in the rows: the pulse A = 3 uplifts the block (A > 1), never at rest
+    assert (ok["uplifted"]).all() and (ok["max_abs_phi"] > 0).all()
+    assert (ok["sim_time"] == 3.0).all()
+
+
+def test_a_failing_case_is_recorded_and_the_sweep_goes_on():
+    beyond_fall = {"scene": "housner-block", "engine": "analytic", "phi0": 3.0}
+    good = {"scene": "housner-block", "engine": "analytic", "phi0": 0.1, "duration": 1.0}
+    df = run_cases([BAD, beyond_fall, good], executor="serial", progress=False)
+    assert list(df["status"]) == ["error", "error", "ok"]
+    assert df["reason"].iloc[0].startswith("SceneError") and "no-such-scene" in df["reason"].iloc[0]
+    assert df["reason"].iloc[1].startswith("ParameterError") and "phi0" in df["reason"].iloc[1]
+    assert pd.isna(df["overturned"].iloc[0]) and df["n_impacts"].iloc[2] >= 1
+
+
+# --- the store ---------------------------------------------------------------------------------
+def test_resume_runs_only_the_missing_cases(tmp_path, monkeypatch):
+    store = tmp_path / "store"
+    cases = _grid()
+    calls = []
+    real = sweep.run_case
+
+    def counting(case):
+        calls.append(case_id(case))
+        return real(case)
+
+    monkeypatch.setattr(sweep, "run_case", counting)
+    half = len(cases) // 2
+    first = run_cases(cases[:half], store=store, executor="serial", progress=False)
+    assert len(calls) == half and len(load_store(store)) == half
+    calls.clear()
+    full = run_cases(cases, store=store, executor="serial", progress=False)
+    assert sorted(calls) == sorted(case_id(c) for c in cases[half:])
+    # the finished rows come from the store untouched (their timings too)
+    pd.testing.assert_frame_equal(full.iloc[:half].reset_index(drop=True),
+                                  first[full.columns].reset_index(drop=True))
+    assert len(load_store(store)) == len(cases)
+    calls.clear()
+    again = run_cases(cases, store=store, executor="serial", progress=False)
+    assert calls == []
+    pd.testing.assert_frame_equal(again, full)
+    # the store is compacted into one file at the end of a sweep
+    assert [p.name.startswith("compact-") for p in store.glob("*.parquet")] == [True]
+
+
+def test_interrupted_sweep_keeps_what_finished(tmp_path, monkeypatch):
+    store = tmp_path / "store"
+    cases = _grid()
+    real = sweep.run_case
+    n = [0]
+
+    def dies_on_third(case):
+        n[0] += 1
+        if n[0] == 3:
+            raise KeyboardInterrupt
+        return real(case)
+
+    monkeypatch.setattr(sweep, "run_case", dies_on_third)
+    with pytest.raises(KeyboardInterrupt):
+        run_cases(cases, store=store, executor="serial", progress=False)
+    assert len(load_store(store)) == 2          # written as they finished, not at the end
+    monkeypatch.setattr(sweep, "run_case", real)
+    df = run_cases(cases, store=store, executor="serial", progress=False)
+    assert (df["status"] == "ok").all() and len(load_store(store)) == len(cases)
+
+
+def test_errors_are_skipped_on_resume_unless_retried(tmp_path):
+    store = tmp_path / "s"
+    run_cases([BAD], store=store, executor="serial", progress=False)
+    stamp = load_store(store)["finished_at"].iloc[0]
+    df = run_cases([BAD], store=store, executor="serial", progress=False)
+    assert df["status"].iloc[0] == "error" and df["finished_at"].iloc[0] == stamp
+    df = run_cases([BAD], store=store, executor="serial", progress=False, retry_errors=True)
+    assert df["status"].iloc[0] == "error"
+    assert len(load_store(store)) == 1
+
+
+def test_store_must_be_a_directory(tmp_path):
+    f = tmp_path / "file.txt"
+    f.write_text("x")
+    with pytest.raises(rb.ParameterError, match="store"):
+        run_cases([BAD], store=f, progress=False)
+
+
+class _Crasher(AnalyticBackend):
+    """Kills its worker process (as a segfault would)."""
+
+    name = "crasher"
+
+    def run(self, motion=None, *, duration=None, phi0=0.0):
+        os._exit(3)
+
+
+@pytest.mark.skipif(multiprocessing.get_start_method() != "fork",
+                    reason="the crashing backend reaches workers by fork only")
+def test_a_dying_worker_marks_its_case_and_spares_the_others(monkeypatch):
+    monkeypatch.setitem(REGISTRY, "crasher", f"{__name__}:_Crasher")
+    good = [{"scene": "housner-block", "engine": "analytic", "phi0": p, "duration": 0.5}
+            for p in (0.05, 0.1, 0.15)]
+    crash = {"scene": "housner-block", "engine": "crasher", "phi0": 0.1, "duration": 0.5}
+    df = run_cases(good[:1] + [crash] + good[1:], executor="process", workers=2,
+                   progress=False)
+    assert list(df["status"]) == ["ok", "error", "ok", "ok"]
+    assert "worker process died" in df["reason"].iloc[1]
+
+
+# --- dask --------------------------------------------------------------------------------------
+def test_dask_missing_gives_a_clear_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    with pytest.raises(rb.RockbenchError, match=r"rockbench\[dask\]"):
+        run_cases([BAD], executor="dask", progress=False)
+
+
+@pytest.mark.slow  # about 10 s: starting two worker processes that import the stack
+def test_dask_local_cluster_gives_the_same_rows():
+    distributed = pytest.importorskip("distributed")
+    cases = _grid()[:4] + [BAD]
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        df = run_cases(cases, executor="dask", dask_address=cluster.scheduler_address,
+                       progress=False)
+    serial = run_cases(cases, executor="serial", progress=False)
+    pd.testing.assert_frame_equal(_physics(df), _physics(serial))
+
+
+# --- progress ----------------------------------------------------------------------------------
+def test_progress_bar_names_the_running_case(capsys):
+    run_cases(_grid()[:1], executor="serial", progress=True)
+    err = capsys.readouterr().err
+    assert "sweep" in err and "analytic housner-block symm+ A=3 W=4" in err
+
+
+# --- grids and maps ----------------------------------------------------------------------------
+def test_pulse_grid_covers_the_product():
+    g = pulse_grid("housner-block", ["symmetric", "antisymmetric"], [1, -1], [1.0, 2.0, 3.0],
+                   [2.0, 4.0], ["analytic", "pymunk"], settings={"pymunk": {"dt": 5e-4}})
+    assert len(g) == 2 * 2 * 2 * 3 * 2
+    assert len({case_id(c) for c in g}) == len(g)
+    assert all(c["settings"] == ({"dt": 5e-4} if c["engine"] == "pymunk" else {}) for c in g)
+    with pytest.raises(rb.ParameterError, match="A_values"):
+        pulse_grid("housner-block", "symmetric", 1, [0.0], [2.0], "analytic")
+    with pytest.raises(rb.ParameterError, match="settings"):
+        pulse_grid("housner-block", "symmetric", 1, [1.0], [2.0], "analytic",
+                   settings={"pymunk": {}})
+
+
+def test_overturn_map_of_the_block():
+    """Housner's block under symmetric pulses: no uplift below A = 1 (a_g < g tan alpha), and at
+    fixed W a stronger pulse never turns an overturn into survival here."""
+    A = [0.8, 2.0, 6.0, 12.0]
+    W = [2.0, 4.0]
+    df = run_cases(pulse_grid("housner-block", "symmetric", 1, A, W, "analytic"),
+                   executor="serial", progress=False)
+    m = overturn_map(df)
+    assert list(m.index) == A and list(m.columns) == W
+    assert (m.loc[0.8] == 0.0).all()
+    assert m.loc[12.0, 2.0] == 1.0
+    assert (m.diff().fillna(0) >= 0).all().all()       # monotone in A on this grid
+    phi = overturn_map(df, value="max_abs_phi")
+    assert (phi.loc[0.8] == 0.0).all() and (phi.loc[2.0] > 0).all()
+    both = pd.concat([df, df.assign(engine="pymunk")])
+    with pytest.raises(rb.ParameterError, match="engine"):
+        overturn_map(both)
+    assert overturn_map(both, engine="analytic").equals(m)

@@ -1,0 +1,222 @@
+"""rockbench.testing: assert_agree, check_backend and the pytest plugin."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rockbench as rb
+from rockbench.engines import available_backends
+from rockbench.engines.analytic import AnalyticBackend
+from rockbench.testing import assert_agree, check_backend
+
+pytest_plugins = ["pytester"]
+
+ROOT = Path(__file__).resolve().parents[1]
+BLOCK = rb.load_scene("housner-block")
+PULSE = rb.RickerPulse.dimensionless(A=3.0, W=4.0, structure=BLOCK.structure)
+ENGINES = [n for n in available_backends() if n != "analytic"]
+
+
+@pytest.fixture(scope="module")
+def ref():
+    return rb.run(BLOCK, PULSE, duration=6.0)
+
+
+def _phi(r, phi):
+    h = r.history.copy()
+    h["phi"] = phi
+    mx = float(np.max(np.abs(phi)))
+    s = replace(r.summary, max_abs_phi=mx, max_abs_phi_over_alpha=mx / r.scene.alpha)
+    return replace(r, backend="fake", history=h, summary=s)
+
+
+# --- assert_agree ----------------------------------------------------------------------------
+def test_a_run_agrees_with_itself(ref):
+    assert ref.summary.n_impacts >= 2
+    assert_agree(ref, ref)
+
+
+def test_peak_failure_says_by_how_much_and_when(ref):
+    fake = _phi(ref, 1.05 * ref.history["phi"].to_numpy())
+    with pytest.raises(AssertionError) as e:
+        assert_agree(fake, ref, nrmse=None)
+    msg = str(e.value)
+    t_peak = ref.history["t"].iloc[int(np.argmax(np.abs(ref.history["phi"])))]
+    assert "1 of 3 checks failed" in msg and "peak:" in msg and "off by +5 %" in msg
+    assert f"t = {t_peak:.4g} s" in msg and "tolerance 3 %" in msg
+    assert_agree(fake, ref, peak_rtol=0.06, nrmse=None)      # within a looser tolerance
+
+
+def test_nrmse_failure_points_at_the_largest_error(ref):
+    t = ref.history["t"].to_numpy()
+    bump = 0.2 * BLOCK.alpha * np.exp(-((t - 1.0) / 0.05) ** 2)
+    fake = _phi(ref, ref.history["phi"].to_numpy() + bump)
+    with pytest.raises(AssertionError) as e:
+        assert_agree(fake, ref, peak_rtol=None)
+    msg = str(e.value)
+    assert "nrmse:" in msg and "largest error +0.2 alpha at t = 1 s" in msg
+    assert "peak" not in msg
+
+
+def test_eta_failure_names_the_impact(ref):
+    ev = ref.events.copy()
+    imp = ev.index[ev["kind"] == "impact"]
+    ev.loc[imp[1], "eta"] *= 1.01
+    fake = replace(ref, backend="fake", events=ev)
+    with pytest.raises(AssertionError) as e:
+        assert_agree(fake, ref)
+    msg = str(e.value)
+    assert "eta: impact 1 at t = " + f"{ev.loc[imp[1], 't']:.4g} s" in msg
+    assert "off by +1 %" in msg and "1 of 2 measured impacts outside: 1" in msg
+    assert_agree(fake, ref, eta_rtol=0.02)
+
+
+def test_verdict_failure_and_skipping_it(ref):
+    s = replace(ref.summary, overturned=True, t_overturn=2.5)
+    fake = replace(ref, backend="fake", summary=s)
+    with pytest.raises(AssertionError, match="verdict: fake overturned at t = 2.5 s, the "
+                                             "reference analytic did not overturn"):
+        assert_agree(fake, ref)
+    assert_agree(fake, ref, verdict=False)
+
+
+def test_a_diverged_run_fails_at_once(ref):
+    s = replace(ref.summary, status="diverged", reason="NaN at t=1 s")
+    with pytest.raises(AssertionError, match="is diverged: NaN at t=1 s"):
+        assert_agree(replace(ref, summary=s), ref)
+
+
+def test_bad_tolerances_raise_parameter_error(ref):
+    with pytest.raises(rb.ParameterError, match="peak_rtol"):
+        assert_agree(ref, ref, peak_rtol=-0.1)
+    with pytest.raises(rb.ParameterError, match="reference"):
+        assert_agree(ref, "analytic")
+
+
+# --- check_backend ---------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["analytic"] + ENGINES[:1])
+def test_shipped_backends_pass_the_contract(name):
+    report = check_backend(name)
+    assert report.ok and not report.failed
+    names = [c.name for c in report.checks]
+    assert names == ["available", "settings", "schema", "units", "phi definition",
+                     "repeatability", "free-rocking eta", "bad input", "divergence reported"]
+    assert {c.status for c in report.checks} <= {"pass", "skip"}
+    assert "free-rocking eta" in str(report)
+
+
+class _Degrees(AnalyticBackend):
+    """Reports phi in degrees: breaks the phi definition and the units."""
+
+    name = "degrees"
+
+    def run(self, motion=None, *, duration=None, phi0=0.0):
+        r = super().run(motion, duration=duration, phi0=phi0)
+        h = r.history.copy()
+        h["phi"] = np.degrees(h["phi"])
+        return replace(r, backend=self.name, history=h)
+
+
+class _Noisy(AnalyticBackend):
+    """Not repeatable, and lax about its input."""
+
+    name = "noisy"
+    _rng = np.random.default_rng()
+
+    def run(self, motion=None, *, duration=None, phi0=0.0):
+        if duration is not None:
+            duration = abs(duration)
+        r = super().run(motion, duration=duration, phi0=phi0)
+        h = r.history.copy()
+        h["phi"] = h["phi"] + 1e-9 * self._rng.standard_normal(len(h))
+        return replace(r, backend=self.name, history=h)
+
+
+def test_a_backend_reporting_degrees_fails_phi_definition_and_units():
+    with pytest.raises(AssertionError) as e:
+        check_backend(_Degrees)
+    msg = str(e.value)
+    assert "phi definition: history starts at phi = +5.65" in msg  # 0.0987 rad in degrees
+    assert "units:" in msg and "summary.max_abs_phi" in msg
+    assert "repeatability" not in msg
+
+
+def test_a_non_repeatable_lax_backend_fails_those_checks():
+    with pytest.raises(AssertionError) as e:
+        check_backend(_Noisy)
+    msg = str(e.value)
+    assert "repeatability: two identical runs differ: history column 'phi'" in msg
+    assert "bad input: duration=-1 did not raise" in msg
+    assert "phi definition" not in msg and "free-rocking eta" not in msg
+
+
+@pytest.mark.skipif("pymunk" not in ENGINES, reason="pymunk not installed")
+def test_an_engine_that_raises_instead_of_reporting_divergence_fails():
+    from rockbench.engines.pymunk import PymunkBackend
+
+    class Raising(PymunkBackend):
+        name = "raising"
+
+        def run(self, motion=None, *, duration=None, phi0=0.0):
+            r = super().run(motion, duration=duration, phi0=phi0)
+            if r.status == "diverged":
+                raise RuntimeError(r.summary.reason)
+            return r
+
+    with pytest.raises(AssertionError, match=r"divergence reported: raised RuntimeError: "
+                                             r"penetration"):
+        check_backend(Raising)
+
+
+def test_check_backend_rejects_unknown_names():
+    with pytest.raises(rb.ParameterError, match="engine"):
+        check_backend("nope")
+
+
+# --- the pytest plugin -----------------------------------------------------------------------
+def test_plugin_parametrizes_over_the_available_engines(pytester):
+    example = (ROOT / "tests" / "user_example" / "test_my_scene.py").read_text()
+    pytester.makepyfile(test_plugin_example=example)
+    res = pytester.runpytest_inprocess("--collect-only", "-q", "-p", "no:cacheprovider")
+    ids = [ln.split("[")[1].rstrip("]") for ln in res.outlines if "::" in ln]
+    assert ids == ENGINES
+
+
+def test_plugin_option_restricts_the_engines():
+    from rockbench.testing import plugin
+
+    class Config:
+        def __init__(self, value):
+            self.value = value
+
+        def getoption(self, name):
+            assert name == "--rockbench-engines"
+            return self.value
+
+    assert plugin._engines(Config(None)) == ENGINES
+    assert plugin._engines(Config(",".join(reversed(ENGINES)))) == ENGINES[::-1]
+    with pytest.raises(pytest.UsageError, match="nope"):
+        plugin._engines(Config("pymunk,nope"))
+
+
+def test_user_example_is_the_one_in_the_docs():
+    example = (ROOT / "tests" / "user_example" / "test_my_scene.py").read_text()
+    doc = (ROOT / "docs" / "testing.md").read_text()
+    body = example.split('"""', 2)[2].strip()
+    assert body in doc
+    assert len([ln for ln in body.splitlines() if ln.strip()]) <= 10
+
+
+def test_plugin_import_is_cheap():
+    code = ("import sys, rockbench.testing.plugin; "
+            "print(sorted(m for m in ('pymunk', 'mujoco', 'pybullet', 'scipy', "
+            "'rockbench.testing.checks', 'rockbench.engines.pymunk') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"
