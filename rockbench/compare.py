@@ -439,7 +439,8 @@ def compare(scene: Scene, motion=None, *, engines=None, phi0: float = 0.0,
         from .engines import REGISTRY
         for k in settings:
             if k not in REGISTRY:
-                raise ParameterError("settings", k, f"keyed by backend names: {', '.join(REGISTRY)}")
+                raise ParameterError("settings", k,
+                                     f"keyed by backend names: {', '.join(REGISTRY)}")
     order = [REFERENCE] + [n for n in names if n != REFERENCE]
 
     bar = None

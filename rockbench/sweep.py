@@ -103,7 +103,8 @@ def normalize_case(case: Mapping[str, Any]) -> dict[str, Any]:
     from .engines import REGISTRY
 
     if not isinstance(case, Mapping):
-        raise ParameterError("case", type(case).__name__, "a dict with keys " + ", ".join(CASE_KEYS))
+        raise ParameterError("case", type(case).__name__,
+                             "a dict with keys " + ", ".join(CASE_KEYS))
     bad = sorted(set(case) - set(CASE_KEYS))
     if bad:
         raise ParameterError(f"case key {bad[0]!r}", case[bad[0]], f"one of {', '.join(CASE_KEYS)}")
@@ -586,7 +587,7 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
             done[rec["case_id"]] = rec
 
     todo: dict[str, dict[str, Any]] = {}
-    for cid, n in zip(ids, norms):
+    for cid, n in zip(ids, norms, strict=True):
         if cid not in done and cid not in todo:
             todo[cid] = n
     items = list(todo.items())
@@ -688,8 +689,8 @@ def overturn_map(frame: pd.DataFrame, *, engine: str | None = None, scene: str |
         raise ParameterError("frame", type(frame).__name__,
                              "a run_cases frame of Ricker cases given by A and W")
     if value not in frame:
-        raise ParameterError("value", value, f"a column of the frame, e.g. overturned, "
-                                             f"max_abs_phi_over_alpha")
+        raise ParameterError("value", value, "a column of the frame, e.g. overturned, "
+                                             "max_abs_phi_over_alpha")
     df = frame[frame["motion.kind"] == "ricker"]
     for col, want in (("engine", engine), ("scene", scene), ("motion.shape", shape),
                       ("motion.sign", sign)):

@@ -119,7 +119,7 @@ def test_eta_rows_use_the_analytic_eta_of_the_direction(free_frame):
     etas = [0.95 * R.eta[int(d)] for d in r.impacts()["direction"]]
     rows = eta_rows(_with_eta(r, etas), r)
     assert [k["impact"] for k in rows] == list(range(len(etas))) and len(rows) >= 2
-    for k, ev in zip(rows, r.impacts().itertuples()):
+    for k, ev in zip(rows, r.impacts().itertuples(), strict=True):
         assert k["direction"] == ev.direction
         assert k["eta_ref"] == R.eta[ev.direction]
         assert k["rel_error"] == pytest.approx(-0.05, abs=1e-12)

@@ -183,7 +183,8 @@ def test_check_backend_rejects_unknown_names():
 def test_plugin_parametrizes_over_the_available_engines(pytester):
     example = (ROOT / "tests" / "user_example" / "test_my_scene.py").read_text()
     pytester.makepyfile(test_plugin_example=example)
-    res = pytester.runpytest_inprocess("--collect-only", "-q", "-p", "no:cacheprovider")
+    res = pytester.runpytest_inprocess("--collect-only", "-q", "-p", "no:cacheprovider",
+                                       "-p", "no:hypothesispytest", "-p", "no:xdist")
     ids = [ln.split("[")[1].rstrip("]") for ln in res.outlines if "::" in ln]
     assert ids == ENGINES
 

@@ -250,7 +250,9 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
             post = -s
             e = ref.eta[post]
             after = e * phid
-            new_mode = post if abs(after) > v_rest else 0
+            # eta <= 0 (possible for squat asymmetric frames): the post-impact mechanism cannot
+            # start, the impact is perfectly plastic and the structure comes to rest
+            new_mode = post if (e > 0.0 and abs(after) > v_rest) else 0
             rows.append(dict(t=t, kind="impact", phi=0.0, phidot_before=phid, phidot_after=after,
                              eta=e, direction=new_mode))
             if new_mode == 0:

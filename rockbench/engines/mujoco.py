@@ -58,9 +58,11 @@ _DEVICE_MODES = ("native", "forces")
 class MujocoSettings(EngineSettings):
     """MuJoCo settings (``docs/engines/mujoco.md`` gives the measurements behind the defaults).
 
-    contact_timeconst : contact time constant [s] (``solref[0]``, MuJoCo's ``refsafe`` off).
-        MuJoCo's default 0.02 s is far too soft for tonnes-scale rocking. Must be
-        >= ``min_timeconst_steps`` * dt (a stiffer contact than the step can resolve blows up).
+    contact_timeconst : contact time constant [s] (``solref[0]``, MuJoCo's ``refsafe`` off), or
+        None (default) for ``min_timeconst_steps * dt`` = 2 dt, the stiffest contact the step
+        resolves (the engine then converges to the rigid-contact reference as dt shrinks).
+        MuJoCo's default 0.02 s is far too soft for tonnes-scale rocking. An explicit value
+        below 2 dt is refused: measured, 1 dt diverges (metres of slip or penetration).
     contact_dampratio : contact damping ratio [-] (``solref[1]``), 1 = critical (no bounce).
     impedance : solimp dmin = dmax [-] in (0, 1): the fraction of the contact's constraint force
         that is not regularized away (MuJoCo default 0.9..0.95).
@@ -75,7 +77,7 @@ class MujocoSettings(EngineSettings):
     """
 
     dt: float = 1e-3
-    contact_timeconst: float = 2e-3
+    contact_timeconst: float | None = None
     contact_dampratio: float = 1.0
     impedance: float = 0.99
     integrator: str = "implicitfast"
@@ -89,11 +91,23 @@ class MujocoSettings(EngineSettings):
     #: the smallest contact time constant allowed, in time steps (measured: 2 is stable)
     min_timeconst_steps: ClassVar[float] = 2.0
 
+    @property
+    def timeconst(self) -> float:
+        """The contact time constant in use [s]."""
+        if self.contact_timeconst is None:
+            return self.min_timeconst_steps * self.dt
+        try:
+            return float(self.contact_timeconst)
+        except (TypeError, ValueError):
+            raise ParameterError("contact_timeconst", self.contact_timeconst,
+                                 "a number [s] or None") from None
+
     def __post_init__(self) -> None:
         super().__post_init__()
-        tc = float(self.contact_timeconst)
         lo = self.min_timeconst_steps * self.dt
-        if not math.isfinite(tc) or tc < lo * (1 - 1e-9) or tc > 1.0:
+        tc = self.timeconst
+        if isinstance(self.contact_timeconst, bool) or not math.isfinite(tc) \
+                or tc < lo * (1 - 1e-9) or tc > 1.0:
             raise ParameterError("contact_timeconst", self.contact_timeconst,
                                  f"in [{self.min_timeconst_steps:g} dt = {lo:g}, 1] s",
                                  "a contact stiffer than the time step can resolve diverges")
@@ -178,7 +192,7 @@ class MujocoBackend(EngineBackend):
         fd = self.foundation
         specs = self.specs
         depth = max(sp.depth for sp in specs)
-        solref = _vec(cfg.contact_timeconst, cfg.contact_dampratio)
+        solref = _vec(cfg.timeconst, cfg.contact_dampratio)
         d = cfg.impedance
         solimp = f"{_f(d)} {_f(d)} 0.001 0.5 2"
         mu = cfg.friction

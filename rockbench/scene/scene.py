@@ -67,6 +67,17 @@ class Scene:
         if self.fall_angle is not None:
             object.__setattr__(self, "fall_angle", check_range(
                 "fall_angle", self.fall_angle, 0.0, math.pi, lo_open=True))
+        if isinstance(self.structure, Frame):
+            from ..analytic.kinematics import geometric_limit, mechanism
+            lims = {s: geometric_limit(mechanism(self.structure, s)) for s in (1, -1)}
+            if min(lims.values()) < self.structure.alpha:
+                raise ParameterError(
+                    "structure", "this frame geometry",
+                    "a frame whose three-block rocking mechanism holds up to |phi| >= alpha = "
+                    f"{self.structure.alpha:.4g} rad",
+                    f"it ends at {lims[1]:.4g} rad counterclockwise, {lims[-1]:.4g} rad "
+                    "clockwise: a column would rotate against the beam, which would then bear "
+                    "on the column's other top corner (a squat frame with very unequal columns)")
 
     # --- derived, shared by all backends --------------------------------------------------
     @property

@@ -250,3 +250,16 @@ def test_bad_values_in_a_scene_file_name_the_parameter(tmp_path):
     with pytest.raises(ParameterError) as e:
         load_scene(p)
     check_error(e.value, "fracture_strain", "> 0")
+
+
+def test_frame_whose_mechanism_breaks_before_alpha_is_refused():
+    """A squat frame with a very short right column: rocking counterclockwise, the beam would
+    rotate faster than the left column (it would bear on that column's other top corner), so
+    the paper's three-block mechanism does not describe it; the scene says so up front."""
+    from rockbench.scene.structure import Frame
+
+    squat = Frame(column_width=2.0, column_height_left=2.9, column_height_right=1.28, span=2.5,
+                  beam_width=4.5, beam_height=1.0, beam_gyration_radius=1.0, mass_ratio=1.0)
+    with pytest.raises(ParameterError, match="structure.*mechanism holds up to"):
+        Scene(structure=squat)
+    Scene(structure=Frame())  # the paper's frame is fine
