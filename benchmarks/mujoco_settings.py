@@ -1,130 +1,116 @@
-"""Accuracy and speed of the MuJoCo backend against the analytic reference, per setting.
+"""Accuracy and speed of an engine backend against the analytic reference, per setting.
 
-Runs the cross-engine checks of issue 3 (free rocking of three scenes from phi0 = 0.5 alpha;
-Ricker pulses that the analytic frame survives; pulses that overturn it) for one or more
-settings of :class:`rockbench.engines.mujoco.MujocoSettings` (or of any engine), and prints one
+Runs the cross-engine cases of issue 3 exactly as ``tests/engines/cases.py`` defines them (free
+rocking of three scenes from phi0 = 0.5 alpha; Ricker pulses the analytic frame survives; pulses
+that overturn it) for one or more settings of the engine (MuJoCo by default), and prints one
 Markdown table row per setting:
 
-* eta: largest |eta_engine / eta_analytic - 1| [%] over the impacts of the free-rocking runs
-  that start in the first ``FREE_WINDOW`` seconds (the last, possibly unfinished, excursion is
-  left out), per scene;
-* rms: largest RMS of (phi_engine - phi_analytic) / alpha over the first 2 s [-];
-* peak: largest |max|phi|_engine / max|phi|_analytic - 1| [%] over the surviving pulses;
+* eta: largest |eta_engine / eta_analytic - 1| [%] over the impacts of each free-rocking run,
+  for impacts after which the structure rocks counterclockwise / clockwise;
+* nrmse: largest RMS of (phi_engine - phi_analytic) / alpha over the first 2 s [-];
+* peak: largest |max|phi|_engine / max|phi|_analytic - 1| [%] over the surviving pulses, per
+  scene (bare asymmetric frame / hybrid eps1);
 * OT: overturning pulses that overturned in the engine / all;
-* pen, slide: largest penetration / sliding [mm] of all runs; rtf: simulated seconds per wall
-  second of stepping (median over runs; noisy on a loaded machine).
+* pen, slide: largest penetration / sliding [mm] over the free and surviving runs, and (after the
+  slash) over the overturning runs; rtf: simulated seconds per wall second of stepping (median
+  over runs). Timings on a loaded machine are noisy.
 
 Usage::
 
-    python benchmarks/mujoco_settings.py                              # defaults
-    python benchmarks/mujoco_settings.py "dt=5e-4" "cone='pyramidal'"  # one row per setting
-    python benchmarks/mujoco_settings.py --engine pymunk ""            # another engine
+    python benchmarks/mujoco_settings.py                               # defaults
+    python benchmarks/mujoco_settings.py "dt=5e-4" "cone='pyramidal'"   # one row per setting
+    python benchmarks/mujoco_settings.py --engine pymunk ""             # another engine
 """
 
 from __future__ import annotations
 
 import argparse
 import functools
+import importlib.util
 import math
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 import rockbench as rb
 from rockbench.analytic.reference import Reference
 
-FREE = ("housner-block", "paper-symmetric", "paper-asymmetric")
-FREE_DURATION = 8.0      # s
-FREE_WINDOW = 6.0        # s: impacts after this are left out (their next peak may be cut)
-RMS_WINDOW = 2.0         # s
-#: (scene, A, W, shapes): pulses the analytic frame survives with max|phi|/alpha in 0.3..0.8
-SURVIVE = (("paper-asymmetric", 6.0, 6.0, ("symmetric", "antisymmetric")),
-           ("paper-asymmetric", 10.0, 6.0, ("symmetric", "antisymmetric")),
-           ("paper-asymmetric-hybrid-eps1", 8.0, 3.0, ("symmetric", "antisymmetric")),
-           ("paper-asymmetric-hybrid-eps1", 10.0, 4.0, ("symmetric", "antisymmetric")))
-#: pulses that overturn the analytic frame (A well above its threshold)
-OVERTURN = (("paper-asymmetric", 5.0, 3.0, ("symmetric", "antisymmetric")),
-            ("paper-asymmetric-hybrid-eps1", 12.0, 3.0, ("symmetric", "antisymmetric")))
-AFTER = 5.0              # s simulated after the pulse
+_CASES = Path(__file__).resolve().parents[1] / "tests" / "engines" / "cases.py"
 
 
-def pulses(table):
-    for name, A, W, shapes in table:
-        sc = rb.load_scene(name)
-        for shape in shapes:
-            for sign in (1, -1):
-                yield (name, A, W, shape, sign), sc, \
-                    rb.RickerPulse.dimensionless(A, W, sc.structure, shape, sign)
+def _load_cases():
+    spec = importlib.util.spec_from_file_location("_rockbench_cases", _CASES)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+cases = _load_cases()
 
 
 @functools.lru_cache(maxsize=None)
-def _reference_free(name):
-    sc = rb.load_scene(name)
-    return rb.run(sc, None, engine="analytic", phi0=0.5 * sc.alpha, duration=FREE_DURATION)
+def _scene(name):
+    return rb.load_scene(name)
 
 
 @functools.lru_cache(maxsize=None)
-def _reference_pulse(name, A, W, shape, sign):
-    sc = rb.load_scene(name)
-    p = rb.RickerPulse.dimensionless(A, W, sc.structure, shape, sign)
-    return rb.run(sc, p, engine="analytic", duration=p.t_end - p.t_start + AFTER)
+def _reference(case):
+    sc = _scene(case.scene)
+    return rb.run(sc, engine="analytic", **case.kwargs(sc))
 
 
-def free_metrics(name, engine, **kw):
-    """(eta errors {direction: max |rel err|}, rms, result) of one free-rocking run."""
-    sc = rb.load_scene(name)
-    ref = _reference_free(name)
-    r = rb.run(sc, None, engine=engine, phi0=0.5 * sc.alpha, duration=FREE_DURATION, **kw)
-    eta = Reference(sc).eta
-    errs = {1: 0.0, -1: 0.0}
-    imp = r.events[(r.events.kind == "impact") & (r.events.t <= FREE_WINDOW)]
-    for _, e in imp.iterrows():
-        d = int(e.direction)
-        err = abs(e.eta / eta[d] - 1) if math.isfinite(e.eta) else math.inf
-        errs[d] = max(errs[d], err)
-    if len(imp) == 0:
-        errs = {1: math.inf, -1: math.inf}
-    h, hr = r.history, ref.history
-    n = min(len(h), len(hr))
-    m = h.t.to_numpy()[:n] <= RMS_WINDOW + 1e-9
-    dphi = (h.phi.to_numpy()[:n] - hr.phi.to_numpy()[:n]) / sc.alpha
-    rms = float(np.sqrt(np.mean(dphi[m] ** 2))) if m.any() else math.inf
-    return errs, rms, r
+def _rms(res, ref, alpha, window):
+    h, hr = res.history, ref.history
+    t = h.t.to_numpy()
+    m = t - t[0] <= window + 1e-9
+    ref_phi = np.interp(t[m], hr.t.to_numpy(), hr.phi.to_numpy())   # same grid if same output_dt
+    d = (h.phi.to_numpy()[m] - ref_phi) / alpha
+    return float(np.sqrt(np.mean(d ** 2))) if m.any() else math.inf
 
 
-def evaluate(engine="mujoco", hybrid=True, **kw):
-    """All metrics of one setting (dict); ``hybrid=False`` leaves out the hybrid frame."""
-    out = dict(eta={}, rms=0.0, peak=0.0, peak_rows=[], ot=0, n_ot=0, pen=0.0, slide=0.0,
-               slide_ot=0.0, rtf=[], status=[])
+def evaluate(engine="mujoco", **kw):
+    """All metrics of one setting (dict)."""
+    out = dict(eta={}, rms=0.0, peak={}, rows=[], ot=0, n_ot=0, pen=0.0, slide=0.0,
+               pen_ot=0.0, slide_ot=0.0, rtf=[], status=[])
 
     def track(r, ot=False):
         s = r.summary
-        out["pen"] = max(out["pen"], s.max_penetration)
-        key = "slide_ot" if ot else "slide"
-        out[key] = max(out[key], s.max_sliding)
+        sfx = "_ot" if ot else ""
+        out["pen" + sfx] = max(out["pen" + sfx], s.max_penetration)
+        out["slide" + sfx] = max(out["slide" + sfx], s.max_sliding)
         if r.cost.wall_s > 0:
             out["rtf"].append(r.cost.sim_time / r.cost.wall_s)
         if s.status != "ok":
             out["status"].append(f"{r.scene.name}: {s.reason}")
 
-    for name in FREE:
-        errs, rms, r = free_metrics(name, engine, **kw)
-        out["eta"][name] = errs
-        out["rms"] = max(out["rms"], rms)
+    for case in cases.FREE_CASES:
+        sc = _scene(case.scene)
+        r = rb.run(sc, engine=engine, **case.kwargs(sc), **kw)
+        eta = Reference(sc).eta
+        errs = {1: math.nan, -1: math.nan}
+        for _, e in r.events[r.events.kind == "impact"].iterrows():
+            d = int(e.direction)
+            err = abs(e.eta / eta[d] - 1) if math.isfinite(e.eta) else math.inf
+            errs[d] = err if math.isnan(errs[d]) else max(errs[d], err)
+        out["eta"][case.scene] = errs
+        out["rms"] = max(out["rms"], _rms(r, _reference(case), sc.alpha, cases.NRMSE_WINDOW))
         track(r)
-    keep = (lambda t: t) if hybrid else (lambda t: [c for c in t if "hybrid" not in c[0]])
-    for key, sc, p in pulses(keep(SURVIVE)):
-        ref = _reference_pulse(*key)
-        r = rb.run(sc, p, engine=engine, duration=p.t_end - p.t_start + AFTER, **kw)
+    for case in cases.SURVIVE_CASES:
+        sc = _scene(case.scene)
+        ref = _reference(case)
+        r = rb.run(sc, engine=engine, **case.kwargs(sc), **kw)
         e = r.summary.max_abs_phi_over_alpha / ref.summary.max_abs_phi_over_alpha - 1
         if r.summary.overturned:
             e = math.inf
-        out["peak"] = max(out["peak"], abs(e))
-        out["peak_rows"].append((*key, ref.summary.max_abs_phi_over_alpha, e))
+        out["peak"][case.scene] = max(out["peak"].get(case.scene, 0.0), abs(e))
+        out["rows"].append((case.id, ref.summary.max_abs_phi_over_alpha, e,
+                            r.summary.max_sliding))
         track(r)
-    for _, sc, p in pulses(keep(OVERTURN)):
-        r = rb.run(sc, p, engine=engine, duration=p.t_end - p.t_start + AFTER, **kw)
+    for case in cases.OVERTURN_CASES:
+        sc = _scene(case.scene)
+        r = rb.run(sc, engine=engine, **case.kwargs(sc), **kw)
         out["n_ot"] += 1
         out["ot"] += int(r.summary.overturned)
         track(r, ot=True)
@@ -133,16 +119,21 @@ def evaluate(engine="mujoco", hybrid=True, **kw):
 
 
 def row(label, m):
-    eta = " | ".join(f"{100 * m['eta'][n][1]:.2f} / {100 * m['eta'][n][-1]:.2f}" for n in FREE)
+    eta = " | ".join(f"{100 * m['eta'][c.scene][1]:.2f} / {100 * m['eta'][c.scene][-1]:.2f}"
+                     for c in cases.FREE_CASES)
+    peak = " / ".join(f"{100 * v:.2f}" for v in m["peak"].values())
     st = "ok" if not m["status"] else f"{len(m['status'])} diverged"
-    return (f"| {label} | {eta} | {m['rms']:.5f} | {100 * m['peak']:.2f} | {m['ot']}/{m['n_ot']} "
-            f"| {1e3 * m['pen']:.3f} | {1e3 * m['slide']:.3f} / {1e3 * m['slide_ot']:.1f} "
-            f"| {m['rtf']:.0f} | {st} |")
+    return (f"| {label} | {eta} | {m['rms']:.5f} | {peak} | {m['ot']}/{m['n_ot']} "
+            f"| {1e3 * m['pen']:.2f} / {1e3 * m['pen_ot']:.2f} "
+            f"| {1e3 * m['slide']:.2f} / {1e3 * m['slide_ot']:.1f} | {m['rtf']:.0f} | {st} |")
 
 
-HEADER = ("| setting | eta err % block (ccw / cw) | symmetric | asymmetric | rms phi/alpha "
-          "| peak err % | OT | pen mm | slide mm (overturning runs) | rtf | status |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|")
+def header():
+    names = " | ".join(f"eta err % {c.scene} (ccw / cw)" for c in cases.FREE_CASES)
+    peaks = " / ".join(sorted({c.scene for c in cases.SURVIVE_CASES}))
+    return (f"| setting | {names} | nrmse | peak err % ({peaks}) | overturned "
+            f"| pen mm (overturn runs) | slide mm (overturn runs) | rtf | status |\n"
+            + "|---" * 10 + "|")
 
 
 def main(argv=None):
@@ -150,22 +141,21 @@ def main(argv=None):
     ap.add_argument("settings", nargs="*", default=[""],
                     help="comma-separated overrides, e.g. \"dt=5e-4,cone='elliptic'\"")
     ap.add_argument("--engine", default="mujoco")
-    ap.add_argument("--verbose", action="store_true")
-    ap.add_argument("--bare", action="store_true", help="leave out the hybrid frame")
+    ap.add_argument("--verbose", action="store_true", help="print every surviving pulse")
     a = ap.parse_args(argv)
-    print(HEADER)
+    print(header())
     for s in a.settings:
         kw = eval(f"dict({s})")  # noqa: S307 - a benchmark script's command line
         t = time.perf_counter()
-        m = evaluate(a.engine, hybrid=not a.bare, **kw)
+        m = evaluate(a.engine, **kw)
         print(row(s or "defaults", m), flush=True)
         if a.verbose:
-            for r in m["peak_rows"]:
-                print(f"    {r[0]} A={r[1]:g} W={r[2]:g} {r[3]} {r[4]:+d}: analytic "
-                      f"{r[5]:.3f} alpha, err {100 * r[6]:+.2f} %")
+            for cid, ref, e, sl in m["rows"]:
+                print(f"    {cid}: analytic {ref:.3f} alpha, peak err {100 * e:+.2f} %, "
+                      f"slide {1e3 * sl:.2f} mm")
             for r in m["status"]:
                 print("    diverged:", r)
-            print(f"    ({time.perf_counter() - t:.0f} s)", file=sys.stderr)
+            print(f"    ({time.perf_counter() - t:.0f} s wall)")
 
 
 if __name__ == "__main__":

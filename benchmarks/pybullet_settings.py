@@ -40,19 +40,24 @@ SWEEPS: dict[str, list[tuple[str, dict]]] = {
     "default": [("defaults", {})],
     "dt": [(f"dt={v:g}", {"dt": v, "output_dt": max(v, 1e-3)})
            for v in (4e-3, 2e-3, 1e-3, 5e-4, 2e-4)],
+    "dt_iterations": [(f"dt={d:g}, solver_iterations={n}",
+                       {"dt": d, "output_dt": 1e-3, "solver_iterations": n})
+                      for d in (1e-3, 5e-4, 2e-4) for n in (50, 100, 200)],
     "breaking": [(f"contact_breaking_threshold={v:g}", {"contact_breaking_threshold": v})
                  for v in (0.02, 5e-3, 1e-3, 1e-4)],
     "anchor": [(f"friction_anchor={v}", {"friction_anchor": v}) for v in (True, False)],
     "iterations": [(f"solver_iterations={v}", {"solver_iterations": v})
                    for v in (5, 10, 20, 50, 100)],
-    "erp": [(f"contact_erp={v:g}", {"contact_erp": v}) for v in (0.05, 0.1, 0.2, 0.5, 0.8)],
+    "erp": [(f"contact_erp={v:g}", {"contact_erp": v}) for v in (0.05, 0.08, 0.1, 0.2, 0.5, 0.8)],
     "stiffness": [(f"contact_stiffness={k:g}", {"contact_stiffness": k, "contact_damping": c})
                   for k, c in ((1e7, 1e5), (1e8, 1e6), (1e9, 1e7), (1e10, 1e8))],
     "solver": [("solver=si", {"solver": "si"}), ("solver=dantzig", {"solver": "dantzig"}),
                ("solver=pgs (trap)", {"solver": "pgs"})],
     "friction": [(f"friction={v:g}", {"friction": v}) for v in (0.5, 1.0, 2.0)],
     "traps": [("Bullet multibody damping 0.04 (trap)", {"_damping": 0.04}),
-              ("friction coefficient not square-rooted (trap)", {"_raw_friction": True})],
+              ("friction=0.6, not square-rooted: pair 0.36 (trap)",
+               {"friction": 0.6, "_raw_friction": True}),
+              ("friction=0.6", {"friction": 0.6})],
 }
 
 

@@ -122,7 +122,7 @@ def _check_page(page: Path, tmp: Path) -> None:
     for line in stderr.splitlines():
         assert "Uncaught" not in line, line
         assert "net::ERR_" not in line, line
-        assert not re.search(r"CONSOLE\(\d+\).*error", line, re.I), line
+        assert not re.search(r"CONSOLE\(\d+\).*error", line, re.IGNORECASE), line
     shot = tmp / "page.png"
     res = _run_chromium(tmp, f"--screenshot={shot}", "--window-size=1280,2000",
                         page.as_uri())

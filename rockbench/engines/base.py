@@ -74,8 +74,9 @@ from ..scene.scene import Scene
 from ..scene.structure import Block, Frame
 
 __all__ = ["Backend", "EngineBackend", "EngineSettings", "BodySpec", "FoundationSpec",
-           "PointForce", "body_specs", "foundation_spec", "initial_poses", "device_forces",
-           "contact_diagnostics", "measure_impacts"]
+           "PointForce", "DeviceGeometry", "ContactProbe", "Excursion", "body_specs",
+           "foundation_spec", "initial_poses", "device_forces", "net_wrenches",
+           "contact_diagnostics", "excursions", "measure_impacts", "output_grid", "run_window"]
 
 
 # =========================================================================================
@@ -91,7 +92,7 @@ class Backend(abc.ABC):
         if not isinstance(scene, Scene):
             raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")
         if settings is None:
-            settings = self.Settings(**overrides)
+            settings = _replace(self.Settings(), overrides) if overrides else self.Settings()
         elif overrides:
             settings = _replace(settings, overrides)
         if not isinstance(settings, self.Settings):
@@ -237,6 +238,10 @@ def _world_vel(state, lx: float, ly: float) -> tuple[float, float]:
     return vx - w * ry, vy + w * rx
 
 
+#: How the dampers' force reaches the bodies (see :class:`DeviceGeometry`).
+DAMPER_MODELS = ("couple", "heel", "distributed")
+
+
 class DeviceGeometry:
     """Anchor points of tendons and dampers of a frame, in body-local coordinates.
 
@@ -266,9 +271,11 @@ class DeviceGeometry:
     """
 
     def __init__(self, scene: Scene, specs: list[BodySpec], damper: str = "couple"):
-        if damper not in ("couple", "heel"):
-            raise ParameterError("damper", damper, "'couple' or 'heel'")
+        if damper not in DAMPER_MODELS:
+            raise ParameterError("damper", damper, f"one of {', '.join(DAMPER_MODELS)}")
         self.damper = damper
+        self.mass = [sp.mass for sp in specs]
+        self.inertia = [sp.inertia for sp in specs]
         self.k = scene.devices.tendon_stiffness
         self.c = scene.devices.damping
         self.l = scene.devices.tendon_length
@@ -287,6 +294,8 @@ class DeviceGeometry:
                                  beam_local, corners))
 
     def elongations(self, state: np.ndarray) -> list[float]:
+        """Tendon elongations [m] (left, right) for the bodies' ``state`` (n_bodies, >= 3)."""
+        state = state.tolist() if isinstance(state, np.ndarray) else state
         out = []
         for idx, F, p_loc, q_loc, t_loc, _ in self.columns:
             P = _world(state[idx], *p_loc)
@@ -296,9 +305,12 @@ class DeviceGeometry:
         return out
 
     def forces(self, state: np.ndarray) -> tuple[list[PointForce], list[float], list[float]]:
-        """Point forces of tendons and dampers, with tendon tensions [N] and damper forces [N]."""
+        """Point forces of tendons and dampers, with tendon tensions [N] and damper forces [N]
+        (C dc/dt, + resisting opening), for the bodies' ``state`` (n_bodies, 6)."""
+        state = state.tolist() if isinstance(state, np.ndarray) else state
         out: list[PointForce] = []
         tensions, dampers = [], []
+        power = 0.0                         # damper power C sum (dc/dt)^2 [W]
         for idx, F, p_loc, q_loc, t_loc, corners in self.columns:
             st = state[idx]
             P = _world(st, *p_loc)
@@ -319,12 +331,14 @@ class DeviceGeometry:
             # damper: chord of the column's rigid rotation about its pivot
             fd = 0.0
             if self.c > 0.0:
-                th, w = float(st[2]), float(st[5])
+                th, w = st[2], st[5]
                 sg = 1.0 if th >= 0.0 else -1.0
                 half = 0.5 * th
                 dchord = 2.0 * self.b[idx] * math.cos(half) * sg   # dc/dtheta [m/rad]
                 fd = self.c * dchord * w                            # C dc/dt [N]
-                if self.damper == "heel":
+                if self.damper == "distributed":
+                    power += fd * dchord * w
+                elif self.damper == "heel":
                     loc = corners[1][0] if sg > 0 else corners[0][0]
                     X = _world(st, *loc)
                     out.append(PointForce(idx, X[0], X[1], fd * math.sin(half),
@@ -335,7 +349,43 @@ class DeviceGeometry:
                     out.append(PointForce(idx, st[0], st[1] + d, -0.5 * tau / d, 0.0))
                     out.append(PointForce(idx, st[0], st[1] - d, 0.5 * tau / d, 0.0))
             dampers.append(fd)
+        if power > 0.0:
+            # the damper power taken from every body in proportion to its momentum
+            two_t = sum(m * (st[3] * st[3] + st[4] * st[4]) + i * st[5] * st[5]
+                        for m, i, st in zip(self.mass, self.inertia, state))
+            if two_t > 0.0:
+                lam = power / two_t
+                for j, (m, i, st) in enumerate(zip(self.mass, self.inertia, state)):
+                    out.append(PointForce(j, st[0], st[1], -lam * m * st[3], -lam * m * st[4]))
+                    tau = -lam * i * st[5]
+                    if tau != 0.0:
+                        out.append(PointForce(j, st[0], st[1] + 1.0, -0.5 * tau, 0.0))
+                        out.append(PointForce(j, st[0], st[1] - 1.0, 0.5 * tau, 0.0))
         return out, tensions, dampers
+
+    def history(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorized over states (n, n_bodies, 6): elongations [m], tendon tensions [N] and
+        damper forces [N] (C dc/dt, + resisting opening), each (n, 2) for the left and right
+        columns, by the same formulas as :meth:`elongations` and :meth:`forces`."""
+        states = np.asarray(states, dtype=float)
+        n = states.shape[0]
+        el = np.zeros((n, 2))
+        dmp = np.zeros((n, 2))
+
+        def world(i, lx, ly):
+            x, y, th = states[:, i, 0], states[:, i, 1], states[:, i, 2]
+            c, s = np.cos(th), np.sin(th)
+            return x + c * lx - s * ly, y + s * lx + c * ly
+
+        for j, (idx, F, p_loc, q_loc, t_loc, _) in enumerate(self.columns):
+            Px, Py = world(idx, *p_loc)
+            Qx, Qy = world(idx, *q_loc)
+            Tx, Ty = world(1, *t_loc)
+            el[:, j] = np.hypot(Px - F[0], Py - F[1]) + np.hypot(Tx - Qx, Ty - Qy)
+            th, w = states[:, idx, 2], states[:, idx, 5]
+            sg = np.where(th >= 0.0, 1.0, -1.0)
+            dmp[:, j] = self.c * 2.0 * self.b[idx] * np.cos(0.5 * th) * sg * w
+        return el, self.k * el, dmp
 
 
 def device_forces(scene: Scene, state: np.ndarray) -> list[PointForce]:
@@ -343,6 +393,19 @@ def device_forces(scene: Scene, state: np.ndarray) -> list[PointForce]:
     if not scene.has_devices:
         return []
     return DeviceGeometry(scene, body_specs(scene)).forces(state)[0]
+
+
+def net_wrenches(forces: list[PointForce], state: np.ndarray) -> np.ndarray:
+    """(n_bodies, 3): the resultant force fx, fy [N] and moment about each body's centre of
+    mass [N m] of ``forces`` for the bodies' ``state`` (n_bodies, 6). For engines that apply a
+    force and a torque per body rather than forces at points."""
+    out = np.zeros((len(state), 3))
+    for f in forces:
+        x, y = state[f.body][0], state[f.body][1]
+        out[f.body, 0] += f.fx
+        out[f.body, 1] += f.fy
+        out[f.body, 2] += (f.px - x) * f.fy - (f.py - y) * f.fx
+    return out
 
 
 # =========================================================================================
@@ -357,13 +420,18 @@ class ContactProbe:
     """Penetration, sliding and opening of the contacts the analytic model assumes, computed
     from body poses only (so every engine is measured the same way).
 
-    * base contacts: the two base corners of each column (block) on the foundation surface;
-    * top contacts: the two top corners of each column against the beam soffit.
+    * base contacts: the two base corners of each column (block) on the foundation surface
+      (y = 0, or the step's top under the right column);
+    * top contacts: the two top corners of each column against the beam soffit, in the beam's
+      frame.
 
-    Penetration: depth of a corner below the surface it rests on [m]. Sliding: tangential
-    displacement [m] of a pivot corner along its surface from its rest position, recorded while
-    the corner is in contact (gap < ``tol``). Opened: a pivot of the current mechanism has a gap
-    larger than ``open_tol`` while the structure rocks.
+    Penetration [m]: depth of a corner below (inside) the surface it rests on. Sliding [m]:
+    tangential distance of a corner from its rest position along its surface, counted while
+    the corner is in contact (gap < ``tol``), so a pivot that creeps or a beam that slides on
+    the column tops shows up, but a heel that swings while lifted does not. Opened: a contact
+    the analytic model keeps closed has a gap above ``open_tol``: a pivot of the current
+    mechanism while the structure rocks (mode +1: bottom-left and top-right corners, mode -1:
+    bottom-right and top-left), or any of them at rest (mode 0).
     """
 
     def __init__(self, scene: Scene, specs: list[BodySpec], tol: float = 1e-3,
@@ -373,10 +441,7 @@ class ContactProbe:
         self.open_tol = open_tol
         self.frame = isinstance(scene.structure, Frame)
         self.cols = [0, 2] if self.frame else [0]
-        self.base_y = {}
-        for i in self.cols:
-            sp = specs[i]
-            self.base_y[i] = sp.y - sp.half_height
+        self.base_y = {i: specs[i].y - specs[i].half_height for i in self.cols}
         self.rest = {}
         for i in self.cols:
             sp = specs[i]
@@ -385,40 +450,51 @@ class ContactProbe:
         self.beam = specs[1] if self.frame else None
 
     def measure(self, state: np.ndarray, mode: int) -> tuple[float, float, bool]:
-        """(penetration [m], sliding [m], pivot opened) for one state and rocking mode."""
-        pen = 0.0
-        slide = 0.0
-        opened = False
+        """(penetration [m], sliding [m], contact opened) for one state (n_bodies, 6) and
+        rocking mode (+1, -1, 0)."""
+        pen, sl, op = self.measure_many(np.asarray(state, dtype=float)[None],
+                                        np.array([mode]))
+        return float(pen[0]), float(sl[0]), bool(op[0])
+
+    def measure_many(self, states: np.ndarray, modes: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorized :meth:`measure` over states (n, n_bodies, 6) and modes (n,): arrays of
+        penetration [m], sliding [m] and opened flags."""
+        states = np.asarray(states, dtype=float)
+        modes = np.asarray(modes)
+        n = states.shape[0]
+        pen = np.zeros(n)
+        slide = np.zeros(n)
+        opened = np.zeros(n, dtype=bool)
+        rocking = modes != 0
+        if self.frame:
+            bx, by, bth = states[:, 1, 0], states[:, 1, 1], states[:, 1, 2]
+            bc, bs_ = np.cos(bth), np.sin(bth)
         for i in self.cols:
             sp = self.specs[i]
-            for name in ("bl", "br"):
-                lx, ly = _corners(sp)[name]
-                X = _world(state[i], lx, ly)
-                gap = X[1] - self.base_y[i]
-                pen = max(pen, -gap)
-                if gap < self.tol:
-                    slide = max(slide, abs(X[0] - self.rest[(i, name)][0]))
-                pivot = (name == "bl") if mode > 0 else (name == "br")
-                if mode != 0 and pivot and gap > self.open_tol:
-                    opened = True
-            if self.frame:
-                bs = self.beam
-                for name in ("tl", "tr"):
-                    lx, ly = _corners(sp)[name]
-                    X = _world(state[i], lx, ly)
-                    # corner in the beam's frame, relative to the beam soffit
-                    bx, by, bth = state[1][0], state[1][1], state[1][2]
-                    c, s = math.cos(bth), math.sin(bth)
-                    rx, ry = X[0] - bx, X[1] - by
-                    u, v = c * rx + s * ry, -s * rx + c * ry
-                    depth = v + bs.half_height   # > 0: corner inside the beam
-                    pen = max(pen, depth)
-                    u0 = self.rest[(i, name)][0] - bs.x
-                    if -depth < self.tol:
-                        slide = max(slide, abs(u - u0))
-                    pivot = (name == "tr") if mode > 0 else (name == "tl")
-                    if mode != 0 and pivot and -depth > self.open_tol:
-                        opened = True
+            x, y, th = states[:, i, 0], states[:, i, 1], states[:, i, 2]
+            c, s = np.cos(th), np.sin(th)
+            for name, (lx, ly) in _corners(sp).items():
+                X = x + c * lx - s * ly
+                Y = y + s * lx + c * ly
+                rx0, _ = self.rest[(i, name)]
+                if name in ("bl", "br"):
+                    gap = Y - self.base_y[i]
+                    tang = X - rx0
+                    pivot = modes > 0 if name == "bl" else modes < 0
+                else:
+                    if not self.frame:
+                        continue
+                    rx, ry = X - bx, Y - by
+                    u = bc * rx + bs_ * ry
+                    v = -bs_ * rx + bc * ry
+                    gap = -(v + self.beam.half_height)      # < 0: corner inside the beam
+                    tang = u - (rx0 - self.beam.x)
+                    pivot = modes > 0 if name == "tr" else modes < 0
+                np.maximum(pen, -gap, out=pen)
+                touch = gap < self.tol
+                np.maximum(slide, np.where(touch, np.abs(tang), 0.0), out=slide)
+                opened |= (gap > self.open_tol) & (pivot | ~rocking)
         return pen, slide, opened
 
 
@@ -430,72 +506,153 @@ def contact_diagnostics(scene: Scene, state: np.ndarray, mode: int) -> tuple[flo
 # =========================================================================================
 # Events and the effective coefficient of restitution from sampled motion
 # =========================================================================================
+class Excursion(NamedTuple):
+    """One uplifted excursion of the sampled motion: samples ``i0..i1`` (inclusive) with
+    |phi| > the uplift tolerance and the sign ``sign``; ``ipk`` the sample of largest |phi|,
+    ``peak`` [rad] that largest |phi| refined by a parabola through the three samples around
+    it; ``after_impact`` whether it began with an impact (a zero crossing from an excursion of
+    the other sign, with no rest in between); ``complete`` whether its peak lies strictly
+    inside it (its motion turned back before the record or the excursion ended), or it starts
+    the record at rest (free rocking from phi0)."""
+
+    i0: int
+    i1: int
+    ipk: int
+    sign: int
+    peak: float
+    after_impact: bool
+    complete: bool
+
+
+def excursions(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, uplift_tol: float,
+               rest_rate: float = 0.0) -> list[Excursion]:
+    """Split a sampled motion into uplifted excursions (see :class:`Excursion`).
+
+    Consecutive uplifted samples of one sign form one excursion. Two excursions of opposite
+    sign are joined by an impact unless a sample between them is at rest (|phi| <=
+    ``uplift_tol`` [rad] and |phidot| <= ``rest_rate`` [rad/s]); two of the same sign are one
+    excursion unless a rest sample separates them.
+    """
+    t = np.asarray(t, dtype=float)
+    phi = np.asarray(phi, dtype=float)
+    phidot = np.asarray(phidot, dtype=float)
+    idx = np.flatnonzero(np.abs(phi) > uplift_tol)
+    if idx.size == 0:
+        return []
+    rest = (np.abs(phi) <= uplift_tol) & (np.abs(phidot) <= rest_rate)
+    rest_before = np.cumsum(rest)                 # rest samples up to and including i
+    sg = np.sign(phi[idx]).astype(int)
+    gap_rest = rest_before[idx[1:]] - rest_before[idx[:-1]] > 0
+    brk = np.flatnonzero((sg[1:] != sg[:-1]) | gap_rest)
+    starts = np.r_[0, brk + 1]
+    ends = np.r_[brk, idx.size - 1]
+    out: list[Excursion] = []
+    for k, (a, b) in enumerate(zip(starts, ends)):
+        i0, i1 = int(idx[a]), int(idx[b])
+        seg = np.abs(phi[i0:i1 + 1])
+        ipk = i0 + int(np.argmax(seg))
+        peak = float(np.abs(phi[ipk]))
+        if i0 < ipk < i1:                         # parabola through the three samples
+            y0, y1, y2 = np.abs(phi[ipk - 1:ipk + 2])
+            den = y0 - 2.0 * y1 + y2
+            if den < 0.0:
+                peak = float(y1 - 0.125 * (y2 - y0) ** 2 / den)
+        after = bool(k > 0 and sg[a] != sg[a - 1] and not gap_rest[a - 1])
+        complete = (i0 < ipk < i1) or (ipk == i0 == 0)
+        out.append(Excursion(i0, i1, ipk, int(sg[a]), peak, after, bool(complete)))
+    return out
+
+
 def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha: float,
                     free: bool, energy=None, inertia0=None, uplift_tol: float,
-                    guard: float = 0.01, window: float = 0.05) -> list[dict[str, Any]]:
-    """Impacts (zero crossings of phi between uplifted excursions) and their effective eta.
+                    guard: float = 0.01, window: float = 0.05,
+                    rest_rate: float = 0.0) -> list[dict[str, Any]]:
+    """Impacts (zero crossings of phi between uplifted excursions, see :func:`excursions`)
+    with the effective coefficient of restitution measured from the sampled motion.
 
-    Two robust estimates, as recommended by ``shared notes/engines.md``:
+    t [s], phi [rad], phidot [rad/s] are the sampled history; ``alpha`` [rad] the slenderness
+    (unused, kept for the signature); ``uplift_tol`` [rad] the |phi| below which the structure
+    counts as closed; ``rest_rate`` [rad/s] the |phidot| below which a closed sample is at rest.
 
-    * ``free`` rocking (no ground motion, no devices): energy of successive peaks. With V_s(phi)
-      the potential of mechanism s at rest velocity and I_s(0) its generalized inertia at rest,
-      eta = sqrt(V_post(peak after) I_pre(0) / (V_pre(peak before) I_post(0))). ``energy(phi)``
-      must return V [J] and ``inertia0(s)`` I_s(0) [kg m^2].
-    * otherwise: phi' just before and after the crossing, each extrapolated to the crossing time
-      by a quadratic fit of phi(t) on a ``window`` [s] that ends (starts) ``guard`` [s] before
-      (after) it, so that a soft contact lasting a few milliseconds does not bias the ratio.
+    Two estimates (``shared/notes/engines.md``: the ratio of angular velocities just before and
+    after a crossing is distorted when an engine's impact lasts milliseconds):
+
+    * energy of successive peaks, when ``free`` (no ground motion, no devices: the energy of an
+      excursion is its potential at the peak) and both excursions' peaks were sampled
+      (:attr:`Excursion.complete`): with V_s(phi) the potential of mechanism s and I_s(0) its
+      generalized inertia at rest, eta = sqrt(V_post(peak after) I_pre(0) / (V_pre(peak
+      before) I_post(0))); ``energy(phi)`` returns V [J] (mechanism of sign(phi)) and
+      ``inertia0(s)`` I_s(0) [kg m^2]. The peaks are refined by a parabola through the three
+      samples around the largest |phi|.
+    * otherwise (ground motion, devices, or a peak not reached before the record ends): phi'
+      just before and after the crossing, each extrapolated to the crossing time by a quadratic
+      fit of phi(t) on a ``window`` [s] that ends ``guard`` [s] before (starts ``guard`` after)
+      it, clipped to the excursion so that a fit never spans another impact; NaN if fewer than
+      five samples remain.
+
+    The crossing time is the zero of the fitted arc before the impact (the rigid-contact impact
+    time, which a soft contact blurs), or the linear interpolation between the two samples
+    around the sign change when that arc has too few samples.
+
+    Returns one dict per impact: t, kind="impact", phi=0, phidot_before, phidot_after (the
+    fits, NaN if too short), eta, direction (sign of the excursion after the impact).
     """
+    t = np.asarray(t, dtype=float)
+    phi = np.asarray(phi, dtype=float)
+    exc = excursions(t, phi, phidot, uplift_tol=uplift_tol, rest_rate=rest_rate)
     rows: list[dict[str, Any]] = []
-    up = np.abs(phi) > uplift_tol
-    if not up.any():
-        return rows
-    sgn = np.sign(phi)
-    # crossing indices: sign change between two uplifted excursions
-    idx = np.nonzero(up)[0]
-    last_i = idx[0]
-    last_s = sgn[last_i]
-    peaks = []  # (time, |phi| max) of each excursion
-    cur_max, cur_t = abs(phi[last_i]), t[last_i]
-    for i in idx[1:]:
-        if sgn[i] != last_s:
-            # zero crossing between last_i and i
-            j = last_i + int(np.argmax(np.sign(phi[last_i:i + 1]) != last_s))
-            j0 = max(j - 1, 0)
-            p0, p1 = phi[j0], phi[j]
-            tc = t[j0] + (t[j] - t[j0]) * (p0 / (p0 - p1) if p0 != p1 else 0.0)
-            peaks.append((cur_t, cur_max * last_s))
-            rows.append(dict(t=float(tc), kind="impact", phi=0.0, direction=int(sgn[i]),
-                             _pre=int(last_s)))
-            last_s = sgn[i]
-            cur_max, cur_t = abs(phi[i]), t[i]
-        elif abs(phi[i]) > cur_max:
-            cur_max, cur_t = abs(phi[i]), t[i]
-        last_i = i
-    peaks.append((cur_t, cur_max * last_s))
-    for k, r in enumerate(rows):
-        pre, post = r.pop("_pre"), r["direction"]
-        tc = r["t"]
-        vb = _fit_rate(t, phi, tc - guard - window, tc - guard, tc)
-        va = _fit_rate(t, phi, tc + guard, tc + guard + window, tc)
-        r["phidot_before"], r["phidot_after"] = vb, va
+    for k in range(1, len(exc)):
+        a, b = exc[k - 1], exc[k]
+        if not b.after_impact:
+            continue
+        # crossing: last sample with the sign of a, next sample (between a.i1 and b.i0)
+        seg = np.sign(phi[a.i1:b.i0 + 1])
+        j = a.i1 + int(np.argmax(seg != a.sign))
+        j0 = max(j - 1, 0)
+        p0, p1 = phi[j0], phi[j]
+        tc = t[j0] + (t[j] - t[j0]) * (p0 / (p0 - p1) if p0 != p1 else 0.0)
+        cb = _fit(t, phi, max(t[a.i0], tc - guard - window), tc - guard, tc)
+        ca = _fit(t, phi, tc + guard, min(t[b.i1], tc + guard + window), tc)
+        if cb is not None:           # the crossing of the arc before the impact
+            x = _root_near_zero(cb, t[j] - t[j0])
+            tc += x
+            cb = _shift(cb, x)
+            ca = _shift(ca, x) if ca is not None else None
+        vb = float(cb[1]) if cb is not None else math.nan
+        va = float(ca[1]) if ca is not None else math.nan
         e = math.nan
-        if free and energy is not None:
-            pb, pa = peaks[k][1], peaks[k + 1][1]
-            Vb, Va = energy(pb), energy(pa)
+        if free and energy is not None and a.complete and b.complete:
+            Vb, Va = energy(a.sign * a.peak), energy(b.sign * b.peak)
             if Vb > 0 and Va > 0:
-                e = math.sqrt(Va * inertia0(pre) / (Vb * inertia0(post)))
-        elif math.isfinite(vb) and math.isfinite(va) and vb != 0.0:
+                e = math.sqrt(Va * inertia0(a.sign) / (Vb * inertia0(b.sign)))
+        if not math.isfinite(e) and math.isfinite(vb) and math.isfinite(va) and vb != 0.0:
             e = va / vb
-        r["eta"] = e
+        rows.append(dict(t=float(tc), kind="impact", phi=0.0, phidot_before=vb,
+                         phidot_after=va, eta=e, direction=b.sign))
     return rows
 
 
-def _fit_rate(t, phi, ta, tb, tc) -> float:
+def _fit(t, phi, ta, tb, tc):
+    """Coefficients (c0, c1, c2) of phi ~ c0 + c1 (t - tc) + c2 (t - tc)^2, least squares on the
+    samples with ta <= t <= tb; None if fewer than five."""
     m = (t >= ta) & (t <= tb)
-    if m.sum() < 4:
-        return math.nan
-    c = np.polyfit(t[m] - tc, phi[m], 2)
-    return float(c[1])
+    if m.sum() < 5:
+        return None
+    return np.polyfit(t[m] - tc, phi[m], 2)[::-1]
+
+
+def _shift(c, x):
+    """The same quadratic about tc + x."""
+    return np.array([c[0] + c[1] * x + c[2] * x * x, c[1] + 2.0 * c[2] * x, c[2]])
+
+
+def _root_near_zero(c, h: float) -> float:
+    """The root of c0 + c1 x + c2 x^2 closest to 0, if within one sample spacing ``h`` (else
+    0: keep the linear estimate)."""
+    c0, c1, c2 = c
+    roots = np.roots([c2, c1, c0]) if c2 != 0.0 else (np.array([-c0 / c1]) if c1 else [])
+    roots = [r.real for r in np.atleast_1d(roots) if abs(r.imag) < 1e-12 and abs(r.real) <= h]
+    return min(roots, key=abs) if roots else 0.0
 
 
 # =========================================================================================
@@ -567,6 +724,14 @@ class EngineBackend(Backend):
         if self.native_devices:
             raise NotImplementedError("an adapter with native devices must remove them")
 
+    def _native_device_report(self, devices: "DeviceGeometry", state: np.ndarray,
+                              elongations: list[float]) -> tuple[list[float], list[float]]:
+        """Tendon tensions and damper forces [N] of native devices for the history, at one
+        output sample ``state`` (n_bodies, 6) while the devices are intact, with the shared
+        geometry's ``elongations`` [m] there. Default: k times the elongations, and no damper
+        force; adapters report what their engine applies in that state."""
+        return [devices.k * e for e in elongations], [0.0, 0.0]
+
     @classmethod
     def version(cls) -> str:
         ok, v = cls.available()
@@ -587,66 +752,64 @@ class EngineBackend(Backend):
         self.wall_s = 0.0
         alpha = scene.alpha
         fall = scene.fall_angles
-        acc = motion.acceleration if motion is not None else (lambda t: 0.0)
-        devices = DeviceGeometry(scene, self.specs) if scene.has_devices else None
+        acc = motion.acceleration if motion is not None else None
+        devices = (DeviceGeometry(scene, self.specs, getattr(cfg, "damper", "couple"))
+                   if scene.has_devices else None)
         intact = devices is not None
+        check_strain = devices is not None and devices.eps_f is not None
         probe = ContactProbe(scene, self.specs)
         uplift_phi = cfg.uplift_tol * alpha
 
-        dt, odt = cfg.dt, cfg.output_dt
+        dt = cfg.dt
+        grid = output_grid(t0, t_end, cfg.output_dt)
+        n_out = grid.size
         n_steps = int(math.ceil((t_end - t0) / dt - 1e-9))
-        rows_out: list[tuple] = []
+        t_tol = 1e-9 * dt
+        samples: list[np.ndarray] = []     # body states on the output grid
+        sample_intact: list[bool] = []
+        native_report: list[tuple] = []    # (tensions, damper forces) of native devices
         ev: list[dict[str, Any]] = []
         status, reason = "ok", None
         overturned = fractured = False
         t_over = t_frac = None
         max_pen = max_slide = 0.0
-        opened = False
+        checked = 0                        # samples already probed for penetration / sliding
         energy0 = None
         free = motion is None and devices is None
-        dyn = None
-        if free:
-            from ..analytic.dynamics import Dynamics  # pure physics: V(phi) and I(0)
-            dyn = {s: Dynamics(scene.structure, s) for s in (1, -1)}
-        next_out = t0
-        prev = None
+        tensions = [0.0, 0.0]
+        damp_f = [0.0, 0.0]
+        prev_t, prev = None, None
         try:
             self._build()
-            state = np.asarray(self._state(), dtype=float)
+            state = np.array(self._state(), dtype=float)
             t = t0
-            tensions = [0.0, 0.0]
-            damp_f = [0.0, 0.0]
             for k in range(n_steps + 1):
                 if not np.all(np.isfinite(state)):
                     raise _Diverged(f"non-finite body state at t={t:.6g} s")
-                phi = state[0][2]
-                # output samples (linear interpolation between steps)
-                while next_out <= t + 1e-12 and next_out <= t_end + 1e-12:
-                    if prev is None or t == prev[0]:
-                        s_out = state
+                # output samples on the fixed grid (linear interpolation between steps)
+                while len(samples) < n_out and grid[len(samples)] <= t + t_tol:
+                    if prev is None or t == prev_t:
+                        samples.append(state)
                     else:
-                        w = (next_out - prev[0]) / (t - prev[0])
-                        s_out = prev[1] + w * (state - prev[1])
-                    mode = 0 if abs(s_out[0][2]) <= uplift_phi else (1 if s_out[0][2] > 0 else -1)
-                    pen, sl, op = probe.measure(s_out, mode)
-                    max_pen, max_slide = max(max_pen, pen), max(max_slide, sl)
-                    opened = opened or op
-                    el = devices.elongations(s_out) if devices is not None else [0.0, 0.0]
-                    rows_out.append((next_out, s_out, mode, intact, el, tensions, damp_f,
-                                     float(acc(next_out)), pen, sl))
-                    next_out = t0 + len(rows_out) * odt
+                        w = (grid[len(samples)] - prev_t) / (t - prev_t)
+                        samples.append(prev + w * (state - prev))
+                    sample_intact.append(intact)
+                    if self.native_devices:
+                        native_report.append(
+                            self._native_device_report(devices, samples[-1],
+                                                       devices.elongations(samples[-1]))
+                            if intact and devices is not None else ([0.0, 0.0], [0.0, 0.0]))
+                if len(samples) - checked >= _PROBE_CHUNK:
+                    max_pen, max_slide = self._check_contacts(probe, samples, checked,
+                                                              uplift_phi, max_pen, max_slide)
+                    checked = len(samples)
+                phi = state[0, 2]
                 if abs(phi) >= fall[1 if phi > 0 else -1]:
                     overturned, t_over = True, t
-                    ev.append(dict(t=t, kind="overturn", phi=phi, phidot_before=state[0][5],
-                                   phidot_after=state[0][5], direction=1 if phi > 0 else -1))
+                    ev.append(dict(t=t, kind="overturn", phi=phi, phidot_before=state[0, 5],
+                                   phidot_after=state[0, 5], direction=1 if phi > 0 else -1))
                     break
-                if max_pen > cfg.max_penetration:
-                    raise _Diverged(f"penetration {max_pen:.3g} m > max_penetration "
-                                    f"{cfg.max_penetration:g} m")
-                if max_slide > cfg.max_sliding:
-                    raise _Diverged(f"sliding {max_slide:.3g} m > max_sliding "
-                                    f"{cfg.max_sliding:g} m")
-                if free and dyn is not None:
+                if free:
                     e = _mech_energy(self.specs, state)
                     if energy0 is None:
                         energy0 = max(e, 1e-300)
@@ -658,27 +821,29 @@ class EngineBackend(Backend):
                     break
                 forces: list[PointForce] = []
                 if intact:
-                    el = devices.elongations(state)
-                    if devices.eps_f is not None and max(el) / devices.l >= devices.eps_f:
+                    el = devices.elongations(state) if (check_strain or self.native_devices) \
+                        else None
+                    if check_strain and max(el) / devices.l >= devices.eps_f:
                         intact = False
                         fractured, t_frac = True, t
                         ev.append(dict(t=t, kind="fracture", phi=phi,
-                                       phidot_before=state[0][5], phidot_after=state[0][5],
+                                       phidot_before=state[0, 5], phidot_after=state[0, 5],
                                        direction=1 if phi > 0 else -1))
                         tensions, damp_f = [0.0, 0.0], [0.0, 0.0]
                         if self.native_devices:
                             self._remove_devices()
                     elif not self.native_devices:
-                        forces, tensions, damp_f = devices.forces(state)
-                    else:
-                        tensions = [devices.k * e for e in el]
+                        forces = devices.forces(state)[0]
+                g_x = -float(acc(t + 0.5 * dt)) if acc is not None else 0.0
                 ts = time.perf_counter()
-                self._step(-float(acc(t + 0.5 * dt)), forces)
+                self._step(g_x, forces)
                 self.wall_s += time.perf_counter() - ts
                 self.steps += 1
-                prev = (t, state)
+                prev_t, prev = t, state
                 t = t0 + (k + 1) * dt
-                state = np.asarray(self._state(), dtype=float)
+                state = np.array(self._state(), dtype=float)
+            max_pen, max_slide = self._check_contacts(probe, samples, checked, uplift_phi,
+                                                      max_pen, max_slide)
         except _Diverged as e:
             status, reason = "diverged", str(e)
         except Exception as e:  # engine failure at the adapter boundary
@@ -689,43 +854,73 @@ class EngineBackend(Backend):
             except Exception:
                 pass
 
-        history = self._history(rows_out, scene)
+        S = np.array(samples, dtype=float).reshape(len(samples), len(self.specs), 6)
+        tt = grid[:len(samples)]
+        ph = S[:, 0, 2]
+        pd_ = S[:, 0, 5]
+        modes = np.where(np.abs(ph) <= uplift_phi, 0, np.sign(ph)).astype(np.int64)
+        pen, sl, op = probe.measure_many(S, modes)
+        max_pen = max(max_pen, float(pen.max(initial=0.0)))
+        max_slide = max(max_slide, float(sl.max(initial=0.0)))
+        opened = bool(op.any())
+        history = self._history(scene, motion, tt, S, modes, np.array(sample_intact, bool),
+                                devices, native_report, pen, sl)
         # events from the sampled motion
-        if len(history):
-            tt = history["t"].to_numpy()
-            ph = history["phi"].to_numpy()
-            pd_ = history["phidot"].to_numpy()
-            up = np.nonzero(np.abs(ph) > uplift_phi)[0]
-            if up.size:
-                i = int(up[0])
-                ev.append(dict(t=float(tt[i]), kind="uplift", phi=float(ph[i]),
-                               phidot_before=float(pd_[i]), phidot_after=float(pd_[i]),
-                               direction=1 if ph[i] > 0 else -1))
-            energy = inertia0 = None
-            if free:
-                energy = lambda p: dyn[1 if p > 0 else -1].energy(p, 0.0)  # noqa: E731
-                inertia0 = lambda s: dyn[s].terms(0.0).inertia  # noqa: E731
-            imp = measure_impacts(tt, ph, pd_, alpha=alpha, free=free, energy=energy,
-                                  inertia0=inertia0, uplift_tol=uplift_phi)
-            if overturned and imp and imp[-1]["t"] > t_over:
-                imp = [r for r in imp if r["t"] <= t_over]
-            ev.extend(imp)
+        rest_rate = cfg.uplift_tol * alpha * scene.p
+        exc = excursions(tt, ph, pd_, uplift_tol=uplift_phi, rest_rate=rest_rate)
+        for x in exc:
+            if not x.after_impact and not (x.i0 == 0 and phi0 != 0.0):
+                # back from the first uplifted sample to the last one still at rest in rate
+                j = x.i0
+                while j > 0 and abs(pd_[j]) > rest_rate and abs(ph[j - 1]) <= abs(ph[j]):
+                    j -= 1
+                ev.append(dict(t=float(tt[j]), kind="uplift", phi=float(ph[j]),
+                               phidot_before=float(pd_[j]), phidot_after=float(pd_[j]),
+                               direction=x.sign))
+        energy = inertia0 = None
+        dyn = None
+        if len(exc):
+            from ..analytic.dynamics import Dynamics  # pure physics: V(phi) and I(0)
+            dev = scene.devices if scene.has_devices else None
+            dyn = {s: Dynamics(scene.structure, s, dev) for s in (1, -1)}
+        if free and dyn is not None:
+            energy = lambda p: dyn[1 if p > 0 else -1].energy(p, 0.0)  # noqa: E731
+            inertia0 = lambda s: dyn[s].terms(0.0).inertia  # noqa: E731
+        imp = measure_impacts(tt, ph, pd_, alpha=alpha, free=free, energy=energy,
+                              inertia0=inertia0, uplift_tol=uplift_phi, rest_rate=rest_rate)
+        if overturned:
+            imp = [r for r in imp if r["t"] <= t_over]
+        ev.extend(imp)
+        if status == "ok":
+            if max_pen > cfg.max_penetration:
+                status, reason = "diverged", (f"penetration {max_pen:.3g} m > max_penetration "
+                                              f"{cfg.max_penetration:g} m")
+            elif max_slide > cfg.max_sliding:
+                status, reason = "diverged", (f"sliding {max_slide:.3g} m > max_sliding "
+                                              f"{cfg.max_sliding:g} m")
+            else:
+                quiet = t0 if motion is None else float(motion.t_end)
+                reason = _peak_energy_growth(exc, tt, ph, history["devices_intact"].to_numpy(),
+                                             dyn, quiet, cfg.energy_gain_tol, alpha)
+                if reason is not None:
+                    status = "diverged"
         events = events_frame(sorted(ev, key=lambda r: r["t"]))
         impacts = events[events["kind"] == "impact"]
-        phis = history["phi"].to_numpy() if len(history) else np.zeros(1)
-        max_abs = float(np.max(np.abs(phis)))
+        max_abs = float(np.max(np.abs(ph))) if ph.size else 0.0
         ups = events[events["kind"] == "uplift"]
         crit = _critical(scene)
+        uplifted = bool(len(ups)) or (phi0 != 0.0 and len(history) > 0)
+        t_up = float(ups["t"].iloc[0]) if len(ups) else (t0 if uplifted else None)
         summary = Summary(
             max_abs_phi=max_abs, max_abs_phi_over_alpha=max_abs / alpha,
             overturned=overturned, t_overturn=t_over,
-            exceeded_critical=overturned or _exceeded(phis, crit, fractured, history),
-            uplifted=bool(len(ups)), t_uplift=float(ups["t"].iloc[0]) if len(ups) else None,
+            exceeded_critical=overturned or _exceeded(ph, crit, fractured, history),
+            uplifted=uplifted, t_uplift=t_up,
             n_impacts=int(len(impacts)), fractured=fractured, t_fracture=t_frac,
             status=status, reason=reason,
             eta_measured=[float(x) for x in impacts["eta"].to_numpy()],
             max_penetration=max_pen, max_sliding=max_slide, contact_opened=opened)
-        sim_time = (float(history["t"].iloc[-1]) - t0) if len(history) else 0.0
+        sim_time = (float(tt[-1]) - t0) if tt.size else 0.0
         cost = Cost(wall_s=self.wall_s, sim_time=sim_time, steps=self.steps)
         settings = asdict(cfg)
         settings["engine_version"] = self.version()
@@ -734,31 +929,96 @@ class EngineBackend(Backend):
                       history=history, events=events, summary=summary, cost=cost,
                       settings=settings)
 
-    def _history(self, rows, scene: Scene) -> pd.DataFrame:
+    def _check_contacts(self, probe: "ContactProbe", samples: list, start: int,
+                        uplift_phi: float, max_pen: float, max_slide: float
+                        ) -> tuple[float, float]:
+        """Probe samples[start:] (vectorized); raise _Diverged beyond the tolerances."""
+        if len(samples) > start:
+            S = np.array(samples[start:], dtype=float)
+            ph = S[:, 0, 2]
+            modes = np.where(np.abs(ph) <= uplift_phi, 0, np.sign(ph))
+            pen, sl, _ = probe.measure_many(S, modes)
+            max_pen = max(max_pen, float(pen.max()))
+            max_slide = max(max_slide, float(sl.max()))
+        cfg = self.settings
+        if max_pen > cfg.max_penetration:
+            raise _Diverged(f"penetration {max_pen:.3g} m > max_penetration "
+                            f"{cfg.max_penetration:g} m")
+        if max_slide > cfg.max_sliding:
+            raise _Diverged(f"sliding {max_slide:.3g} m > max_sliding {cfg.max_sliding:g} m")
+        return max_pen, max_slide
+
+    def _history(self, scene: Scene, motion, t: np.ndarray, S: np.ndarray, modes: np.ndarray,
+                 intact: np.ndarray, devices: "DeviceGeometry | None", native_report: list,
+                 pen: np.ndarray, sl: np.ndarray) -> pd.DataFrame:
+        """The history frame (HISTORY_COLUMNS + CONTACT_COLUMNS) from the sampled states."""
+        n = t.size
         frame = isinstance(scene.structure, Frame)
-        cols: dict[str, list] = {c: [] for c in list(HISTORY_COLUMNS) + list(CONTACT_COLUMNS)}
-        for (t, st, mode, intact, el, ten, dmp, a, pen, sl) in rows:
-            cols["t"].append(t)
-            cols["phi"].append(st[0][2])
-            cols["phidot"].append(st[0][5])
-            cols["ground_acc"].append(a)
-            cols["theta_beam"].append(st[1][2] if frame else math.nan)
-            cols["theta_right"].append(st[2][2] if frame else math.nan)
-            cols["mode"].append(mode)
-            cols["devices_intact"].append(intact)
-            on = scene.has_devices and intact
-            cols["tendon_elong_left"].append(el[0] if on else 0.0)
-            cols["tendon_elong_right"].append(el[1] if on else 0.0)
-            cols["tendon_force_left"].append(ten[0] if on else 0.0)
-            cols["tendon_force_right"].append(ten[1] if on else 0.0)
-            cols["damper_force_left"].append(dmp[0] if on else 0.0)
-            cols["damper_force_right"].append(dmp[1] if on else 0.0)
-            cols["penetration"].append(pen)
-            cols["sliding"].append(sl)
-        df = pd.DataFrame(cols)
-        df["mode"] = df["mode"].astype("int64")
-        df["devices_intact"] = df["devices_intact"].astype(bool)
+        nan = np.full(n, np.nan)
+        zero = np.zeros(n)
+        acc = (np.asarray(motion.acceleration(t), dtype=float).reshape(n)
+               if motion is not None and n else zero.copy())
+        cols: dict[str, Any] = {
+            "t": t, "phi": S[:, 0, 2].copy(), "phidot": S[:, 0, 5].copy(), "ground_acc": acc,
+            "theta_beam": S[:, 1, 2].copy() if frame else nan,
+            "theta_right": S[:, 2, 2].copy() if frame else nan,
+            "mode": modes.astype(np.int64), "devices_intact": intact.astype(bool)}
+        el = ten = dmp = np.zeros((n, 2))
+        if devices is not None and n:
+            el, ten, dmp = devices.history(S)
+            if self.native_devices and native_report:
+                ten = np.array([r[0] for r in native_report], dtype=float).reshape(n, 2)
+                dmp = np.array([r[1] for r in native_report], dtype=float).reshape(n, 2)
+            on = intact[:, None]
+            el, ten, dmp = (np.where(on, a, 0.0) for a in (el, ten, dmp))
+        for j, side in enumerate(("left", "right")):
+            cols[f"tendon_elong_{side}"] = el[:, j].copy()
+            cols[f"tendon_force_{side}"] = ten[:, j].copy()
+            cols[f"damper_force_{side}"] = dmp[:, j].copy()
+        cols["penetration"] = pen
+        cols["sliding"] = sl
+        df = pd.DataFrame(cols, columns=list(HISTORY_COLUMNS) + list(CONTACT_COLUMNS))
+        for c in df.columns:
+            if c not in ("mode", "devices_intact"):
+                df[c] = df[c].astype(np.float64)
         return df
+
+
+#: Output samples probed together (vectorized) for the penetration / sliding divergence check.
+_PROBE_CHUNK = 500
+
+
+def output_grid(t0: float, t_end: float, output_dt: float) -> np.ndarray:
+    """The output times [s]: t0 + k output_dt up to t_end, and t_end itself when it is not on
+    that grid (the analytic backend's grid, so that histories align sample by sample)."""
+    n = int(math.floor((t_end - t0) / output_dt + 1e-9)) + 1
+    tg = t0 + output_dt * np.arange(n)
+    if tg[-1] < t_end - 1e-12:
+        tg = np.append(tg, t_end)
+    return tg
+
+
+def _peak_energy_growth(exc: list, t: np.ndarray, phi: np.ndarray, intact: np.ndarray, dyn,
+                        t_quiet: float, tol: float, alpha: float) -> str | None:
+    """Reason string if the energy of an excursion (its potential at its peak: gravity and
+    intact tendons) exceeds that of the previous one by more than ``tol`` (relative) plus
+    ``tol`` times the potential at |phi| = alpha / 20, for excursions after the ground motion
+    ended (``t_quiet`` [s]); None otherwise. Impacts and dampers only remove energy."""
+    if dyn is None or len(exc) < 2:
+        return None
+    floor = tol * min(dyn[s].energy(s * 0.05 * alpha, 0.0, True) for s in (1, -1))
+    prev = None
+    for x in exc:
+        if not x.complete or t[x.i0] < t_quiet:
+            prev = None
+            continue
+        V = dyn[x.sign].energy(x.sign * x.peak, 0.0, bool(intact[x.ipk]))
+        if prev is not None and x.after_impact and V > prev[0] * (1 + tol) + floor:
+            return (f"mechanical energy grew without input: peak {x.sign * x.peak:.4g} rad at "
+                    f"t={t[x.ipk]:.4g} s holds {V:.4g} J, the previous peak (t={prev[1]:.4g} s) "
+                    f"{prev[0]:.4g} J")
+        prev = (V, float(t[x.ipk]))
+    return None
 
 
 def _mech_energy(specs: list[BodySpec], state: np.ndarray) -> float:

@@ -5,31 +5,50 @@ Model (generated MJCF, from the scene alone)
 rockbench's plane x-y (y up) is MuJoCo's x-z plane (z up). Each body of the scene is one MuJoCo
 body whose frame sits at the body's rest centre of mass, with three joints: ``slide x``,
 ``slide z`` and a ``hinge`` about the axis (0, -1, 0). With that axis a positive hinge angle
-turns x towards +z, i.e. counterclockwise in rockbench's x-y plane, so the hinge angle *is*
-rockbench's theta (phi for the left column) with no sign flip. ``qpos`` of a body is therefore
-(x - x_rest, y - y_rest, theta) and ``qvel`` (vx, vy, omega).
+turns +x towards +z, i.e. counterclockwise in rockbench's x-y plane, so the hinge angle *is*
+rockbench's theta (phi for the left column), with no sign flip. ``qpos`` of a body is
+(x - x_rest, y - y_rest, theta) and ``qvel`` is (vx, vy, omega).
 
-Masses and inertias are set explicitly (``<inertial>``): the in-plane moment (about MuJoCo's y
-axis) is the scene's (for the beam m rho^2, not the box's); the two out-of-plane moments are the
-box's, raised only if needed to satisfy MuJoCo's triangle inequality. They never enter the
-dynamics, because the joints allow no out-of-plane rotation.
+Masses and inertias are set explicitly (``<inertial>``): the moment about MuJoCo's y axis is the
+scene's in-plane moment (for the beam m rho^2, not the box's); the two out-of-plane moments are
+the box's, raised only where MuJoCo's triangle inequality needs it. They never enter the
+dynamics: the joints allow no out-of-plane motion.
 
-Contacts are explicit ``<pair>`` elements (automatic collisions are off): block/column bases on
-the ground plane (the right column on the step box of the asymmetric frame), and both column tops
-against the beam. Each pair gets exactly ``settings.friction`` (no max-combination rule applies
-to explicit pairs), condim 3, and the contact softness of the settings. MuJoCo contacts never
-bounce: restitution comes only from an under-damped ``solref``, and the default is critically
-damped.
+Contacts are explicit ``<pair>`` elements (automatic collisions are off, so the columns never
+touch each other or the step they do not stand on): block/column bases on the ground plane (the
+right column on the step box of the asymmetric frame) and both column tops against the beam.
+Each pair gets exactly ``settings.friction`` (explicit pairs bypass MuJoCo's max-combination
+rule), condim 3, and the contact softness of the settings; no restitution (MuJoCo contacts bounce
+only when ``solref`` is under-damped; the default is critically damped).
 
-Devices (``devices="native"``, the default): each tendon is a spatial tendon through four
-sites, foundation anchor F (rest position of the column base centre) -> column base centre P ->
-column top centre Q -> beam anchor T (rest position of Q on the beam), with stiffness k and
-spring length 2H: its length minus 2H is exactly the base opening plus the top opening of the
-scene model. Each damper is a spatial tendon from a base corner to a world site at that corner's
-rest position, with damping C; as in the shared model, only the heel (the corner farther from its
-rest position) is damped, by switching ``tendon_damping`` each step. ``devices="forces"`` uses
-the shared point forces of :class:`rockbench.engines.base.DeviceGeometry` instead. Fracture
-zeroes the tendons' stiffness and damping.
+Devices (``devices="native"``, the default)
+-------------------------------------------
+Tendon j is a spatial tendon through four sites: foundation anchor F (rest position of the column
+base centre) -> column base centre P -> column top centre Q -> beam anchor T (rest position of Q,
+fixed to the beam), with stiffness k and spring length |PQ| = 2H: its length minus 2H is exactly
+the base opening |PF| plus the top opening |QT| of the scene model. At rest the segments FP and QT
+have zero length; MuJoCo's direction is then arbitrary but the tension k (L - 2H) is zero, and
+the generalized forces equal the shared model's at every rotation (tested).
+
+Dampers (``damper``): the scene model's damper dissipates C (dc_j/dt)^2, c_j the chord of the
+heel of column j for its rotation about the pivot. Three ways to apply it, measured in
+``docs/engines/mujoco.md``:
+
+* ``"distributed"`` (default, the shared model's name): damping on every joint in proportion to
+  the body's inertia (m, m, I) at the rate C sum_j (dc_j/dt)^2 / (2 x kinetic energy), updated
+  every step. It dissipates exactly the damper's power, and because the force is proportional to
+  momentum it changes no contact reaction: the pivots carry exactly what they carry without
+  dampers. MuJoCo integrates joint damping implicitly.
+* ``"couple"``: damping C (dc_j/dtheta_j)^2 on the column's hinge, a pure couple (the shared
+  model of :class:`~rockbench.engines.base.DeviceGeometry`).
+* ``"heel"``: a spatial tendon from each base corner to a world site at its rest position, the
+  heel's tendon damped with C -- the literal device. It pushes the heel with C dc/dt, up to
+  4 MN on closing, more than the dead load on the pivot (about 1 MN), and lifts the column.
+
+The couple also needs pivot reactions the contacts cannot give (the columns slip 2-3 cm just
+after impacts); only the distributed form reproduces the model, whose pivots are bilateral.
+``devices="forces"`` uses the shared point forces of ``DeviceGeometry`` instead (the same three
+damper models, applied explicitly as forces). Fracture switches every device off.
 
 See ``docs/engines/mujoco.md`` for the measurements behind every default.
 """
@@ -43,37 +62,54 @@ from typing import ClassVar
 import numpy as np
 
 from ..constants import G
-from ..errors import ParameterError
-from .base import EngineBackend, EngineSettings, PointForce
+from ..errors import ParameterError, check_finite, check_range
+from .base import DAMPER_MODELS, EngineBackend, EngineSettings, PointForce
 
 __all__ = ["MujocoBackend", "MujocoSettings"]
 
 _INTEGRATORS = {"euler": "Euler", "implicitfast": "implicitfast", "implicit": "implicit",
                 "rk4": "RK4"}
-_CONES = ("pyramidal", "elliptic")
+_CONES = ("elliptic", "pyramidal")
 _DEVICE_MODES = ("native", "forces")
+
+
+def _check_int(name: str, value, lo: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) \
+            or not float(value).is_integer() or value < lo:
+        raise ParameterError(name, value, f"an integer >= {lo}")
+    return int(value)
+
+
+def _check_choice(name: str, value, choices) -> str:
+    if value not in choices:
+        raise ParameterError(name, value, f"one of {', '.join(choices)}")
+    return value
 
 
 @dataclass(frozen=True)
 class MujocoSettings(EngineSettings):
     """MuJoCo settings (``docs/engines/mujoco.md`` gives the measurements behind the defaults).
 
-    contact_timeconst : contact time constant [s] (``solref[0]``, MuJoCo's ``refsafe`` off), or
-        None (default) for ``min_timeconst_steps * dt`` = 2 dt, the stiffest contact the step
-        resolves (the engine then converges to the rigid-contact reference as dt shrinks).
-        MuJoCo's default 0.02 s is far too soft for tonnes-scale rocking. An explicit value
-        below 2 dt is refused: measured, 1 dt diverges (metres of slip or penetration).
-    contact_dampratio : contact damping ratio [-] (``solref[1]``), 1 = critical (no bounce).
-    impedance : solimp dmin = dmax [-] in (0, 1): the fraction of the contact's constraint force
-        that is not regularized away (MuJoCo default 0.9..0.95).
-    integrator : "euler" (semi-implicit, MuJoCo default), "implicitfast", "implicit" or "rk4".
-    cone : friction cone, "pyramidal" (MuJoCo default) or "elliptic".
-    impratio : ratio of frictional to normal constraint impedance [-] (MuJoCo default 1).
-    noslip_iterations : iterations of MuJoCo's post-solve "noslip" pass (0: off).
+    dt : time step [s] (default 1e-3).
+    contact_timeconst : contact time constant [s] (``solref[0]``, with MuJoCo's ``refsafe``
+        off), or None (default) for 2 dt, the stiffest contact the step resolves; the engine then
+        converges to the rigid-contact reference as dt shrinks. MuJoCo's default 0.02 s is far
+        too soft for tonnes-scale rocking. Values below 2 dt are refused: at 1 dt the contacts
+        diverge (centimetres of penetration or slip within a second).
+    contact_dampratio : contact damping ratio [-] (``solref[1]``), in [0.1, 10]; 1 = critical
+        (no bounce).
+    impedance : solimp dmin = dmax [-], in (0, 1): the share of the contact's constraint force
+        that is not regularized away (MuJoCo's default 0.9-0.95 lets the pivots creep).
+    integrator : "implicitfast" (default), "euler", "implicit" or "rk4".
+    cone : friction cone, "elliptic" (default) or "pyramidal" (MuJoCo's default).
+    impratio : frictional-to-normal constraint impedance ratio [-], in [0.1, 100].
+    noslip_iterations : iterations of MuJoCo's post-solve "noslip" pass (0: off), >= 0.
     iterations : constraint solver (Newton) iterations per step, >= 1.
     tolerance : solver tolerance [-], >= 0.
-    devices : "native" (MuJoCo spatial tendons with stiffness and damping) or "forces" (the
-        shared point forces computed from the poses).
+    devices : "native" (default: MuJoCo tendons and joint damping) or "forces" (the shared
+        point forces computed from the poses).
+    damper : damper model, "distributed" (default), "couple" or "heel" (see the module and
+        :class:`rockbench.engines.base.DeviceGeometry`).
     """
 
     dt: float = 1e-3
@@ -87,8 +123,10 @@ class MujocoSettings(EngineSettings):
     iterations: int = 100
     tolerance: float = 1e-10
     devices: str = "native"
+    damper: str = "distributed"
 
-    #: the smallest contact time constant allowed, in time steps (measured: 2 is stable)
+    #: the smallest contact time constant allowed, in time steps (measured: 2 is stable,
+    #: 1.5 slips millimetres, 1 diverges)
     min_timeconst_steps: ClassVar[float] = 2.0
 
     @property
@@ -96,39 +134,28 @@ class MujocoSettings(EngineSettings):
         """The contact time constant in use [s]."""
         if self.contact_timeconst is None:
             return self.min_timeconst_steps * self.dt
-        try:
-            return float(self.contact_timeconst)
-        except (TypeError, ValueError):
-            raise ParameterError("contact_timeconst", self.contact_timeconst,
-                                 "a number [s] or None") from None
+        return float(self.contact_timeconst)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         lo = self.min_timeconst_steps * self.dt
-        tc = self.timeconst
-        if isinstance(self.contact_timeconst, bool) or not math.isfinite(tc) \
-                or tc < lo * (1 - 1e-9) or tc > 1.0:
-            raise ParameterError("contact_timeconst", self.contact_timeconst,
-                                 f"in [{self.min_timeconst_steps:g} dt = {lo:g}, 1] s",
-                                 "a contact stiffer than the time step can resolve diverges")
-        if not (math.isfinite(self.contact_dampratio) and 0.1 <= self.contact_dampratio <= 10):
-            raise ParameterError("contact_dampratio", self.contact_dampratio, "in [0.1, 10]")
-        if not (math.isfinite(self.impedance) and 0.0 < self.impedance < 1.0):
-            raise ParameterError("impedance", self.impedance, "in (0, 1)")
-        if self.integrator not in _INTEGRATORS:
-            raise ParameterError("integrator", self.integrator, f"one of {', '.join(_INTEGRATORS)}")
-        if self.cone not in _CONES:
-            raise ParameterError("cone", self.cone, f"one of {', '.join(_CONES)}")
-        if not (math.isfinite(self.impratio) and 0.1 <= self.impratio <= 100):
-            raise ParameterError("impratio", self.impratio, "in [0.1, 100]")
-        if int(self.noslip_iterations) != self.noslip_iterations or self.noslip_iterations < 0:
-            raise ParameterError("noslip_iterations", self.noslip_iterations, "an integer >= 0")
-        if int(self.iterations) != self.iterations or self.iterations < 1:
-            raise ParameterError("iterations", self.iterations, "an integer >= 1")
-        if not (math.isfinite(self.tolerance) and self.tolerance >= 0.0):
+        if self.contact_timeconst is not None:
+            tc = check_finite("contact_timeconst", self.contact_timeconst)
+            if not lo * (1 - 1e-9) <= tc <= 1.0:
+                raise ParameterError("contact_timeconst", self.contact_timeconst,
+                                     f"None or in [{self.min_timeconst_steps:g} dt = {lo:g}, 1] s",
+                                     "a contact stiffer than the time step resolves diverges")
+        check_range("contact_dampratio", self.contact_dampratio, 0.1, 10.0)
+        check_range("impedance", self.impedance, 0.0, 1.0, lo_open=True, hi_open=True)
+        _check_choice("integrator", self.integrator, tuple(_INTEGRATORS))
+        _check_choice("cone", self.cone, _CONES)
+        check_range("impratio", self.impratio, 0.1, 100.0)
+        _check_int("noslip_iterations", self.noslip_iterations, 0)
+        _check_int("iterations", self.iterations, 1)
+        if check_finite("tolerance", self.tolerance) < 0.0:
             raise ParameterError("tolerance", self.tolerance, ">= 0")
-        if self.devices not in _DEVICE_MODES:
-            raise ParameterError("devices", self.devices, f"one of {', '.join(_DEVICE_MODES)}")
+        _check_choice("devices", self.devices, _DEVICE_MODES)
+        _check_choice("damper", self.damper, DAMPER_MODELS)
 
 
 def _f(x: float) -> str:
@@ -141,13 +168,13 @@ def _vec(*xs: float) -> str:
 
 def _inertia(sp) -> tuple[float, float, float]:
     """Diagonal inertia (Ixx, Iyy, Izz) [kg m^2] of a body in MuJoCo axes: Iyy is the scene's
-    in-plane moment; Ixx, Izz the box's, raised if needed for the triangle inequality."""
+    in-plane moment; Ixx, Izz the box's, raised where needed for the triangle inequality."""
     m = sp.mass
     hx, hy, hz = sp.half_width, 0.5 * sp.depth, sp.half_height
     ixx = m * (hy * hy + hz * hz) / 3.0
     izz = m * (hx * hx + hy * hy) / 3.0
     iyy = sp.inertia
-    if ixx + izz < iyy:                 # out-of-plane values never enter the planar dynamics
+    if ixx + izz < iyy:
         s = iyy / (ixx + izz)
         ixx, izz = ixx * s, izz * s
     ixx = max(ixx, abs(izz - iyy))
@@ -163,6 +190,7 @@ class MujocoBackend(EngineBackend):
 
     @property
     def native_devices(self) -> bool:  # type: ignore[override]
+        """True when the devices are MuJoCo elements (``settings.devices == "native"``)."""
         return self.settings.devices == "native"
 
     @classmethod
@@ -175,8 +203,8 @@ class MujocoBackend(EngineBackend):
 
     # --- the model ------------------------------------------------------------------------
     def compile(self, phi0: float = 0.0):
-        """Build the MuJoCo model and data of the scene at rotation ``phi0`` [rad] outside a run
-        (for inspection and tests); returns the ``mujoco.MjModel``."""
+        """Build the model and data of the scene at rotation ``phi0`` [rad] outside a run (for
+        inspection and tests); returns the ``mujoco.MjModel`` (``self.data`` is its data)."""
         from .base import body_specs, foundation_spec, initial_poses
 
         self.specs = body_specs(self.scene)
@@ -185,93 +213,94 @@ class MujocoBackend(EngineBackend):
         self._build()
         return self.model
 
+    def _native(self) -> bool:
+        return self.scene.has_devices and self.native_devices and len(self.specs) == 3
+
     def mjcf(self) -> str:
-        """The MJCF text of the scene (needs ``self.specs``, ``self.foundation`` and
-        ``self.poses0``, set by ``run`` or :meth:`compile`)."""
+        """The MJCF text of the scene (needs ``self.specs`` and ``self.foundation``, set by
+        ``run`` or :meth:`compile`)."""
         cfg = self.settings
         fd = self.foundation
         specs = self.specs
-        depth = max(sp.depth for sp in specs)
-        solref = _vec(cfg.timeconst, cfg.contact_dampratio)
-        d = cfg.impedance
-        solimp = f"{_f(d)} {_f(d)} 0.001 0.5 2"
-        mu = cfg.friction
         frame = len(specs) == 3
+        dev = self._native()
+        dv = self.scene.devices
+        heel = dev and dv.has_dampers and cfg.damper == "heel"
+        depth = max(sp.depth for sp in specs)
         out = ['<mujoco model="rockbench">',
+               '  <compiler angle="radian" inertiafromgeom="false"/>',
                f'  <option timestep="{_f(cfg.dt)}" gravity="0 0 {_f(-G)}" '
-               f'integrator="{_INTEGRATORS[cfg.integrator]}" cone="{cfg.cone}" iterations="{int(cfg.iterations)}" '
-               f'tolerance="{_f(cfg.tolerance)}" impratio="{_f(cfg.impratio)}" '
-               f'noslip_iterations="{int(cfg.noslip_iterations)}">',
+               f'integrator="{_INTEGRATORS[cfg.integrator]}" cone="{cfg.cone}" '
+               f'iterations="{int(cfg.iterations)}" tolerance="{_f(cfg.tolerance)}" '
+               f'impratio="{_f(cfg.impratio)}" noslip_iterations="{int(cfg.noslip_iterations)}">',
                '    <flag refsafe="disable"/>',
                '  </option>',
-               '  <compiler angle="radian" inertiafromgeom="false"/>',
                '  <default><geom contype="0" conaffinity="0"/></default>',
                '  <worldbody>',
-               '    <geom name="ground" type="plane" size="0 0 1" pos="0 0 0"/>']
+               '    <geom name="ground" type="plane" size="0 0 1"/>']
         if fd.step_x0 is not None:
-            hx = 0.5 * (fd.step_x1 - fd.step_x0)
-            hz = 0.5 * fd.step_height
+            hx, hz = 0.5 * (fd.step_x1 - fd.step_x0), 0.5 * fd.step_height
             out.append(f'    <geom name="step" type="box" size="{_vec(hx, depth, hz)}" '
                        f'pos="{_vec(0.5 * (fd.step_x0 + fd.step_x1), 0.0, hz)}"/>')
-        dev = self.scene.has_devices and self.native_devices and frame
-        if dev:
-            for j, idx in enumerate((0, 2)):
-                sp = specs[idx]
-                out.append(f'    <site name="F{j}" pos="{_vec(sp.x, 0.0, sp.y - sp.half_height)}"/>')
+        columns = ((0, specs[0]), (1, specs[2])) if frame else ()
+        for j, sp in columns if dev else ():
+            base = sp.y - sp.half_height
+            out.append(f'    <site name="F{j}" pos="{_vec(sp.x, 0.0, base)}"/>')
+            if heel:
                 for side, sx in (("l", -1.0), ("r", 1.0)):
                     out.append(f'    <site name="R{j}{side}" '
-                               f'pos="{_vec(sp.x + sx * sp.half_width, 0.0, sp.y - sp.half_height)}"/>')
-        for i, (sp, pose) in enumerate(zip(specs, self.poses0)):
+                               f'pos="{_vec(sp.x + sx * sp.half_width, 0.0, base)}"/>')
+        for i, sp in enumerate(specs):
             ixx, iyy, izz = _inertia(sp)
-            out.append(f'    <body name="{sp.name}" pos="{_vec(sp.x, 0.0, sp.y)}">')
-            out.append(f'      <joint name="{sp.name}_x" type="slide" axis="1 0 0"/>')
-            out.append(f'      <joint name="{sp.name}_z" type="slide" axis="0 0 1"/>')
-            out.append(f'      <joint name="{sp.name}_th" type="hinge" axis="0 -1 0"/>')
-            out.append(f'      <inertial pos="0 0 0" mass="{_f(sp.mass)}" '
-                       f'diaginertia="{_vec(ixx, iyy, izz)}"/>')
-            out.append(f'      <geom name="{sp.name}" type="box" '
-                       f'size="{_vec(sp.half_width, 0.5 * sp.depth, sp.half_height)}"/>')
-            if dev and sp.name in ("left", "right"):
-                j = 0 if sp.name == "left" else 1
+            out += [f'    <body name="{sp.name}" pos="{_vec(sp.x, 0.0, sp.y)}">',
+                    f'      <joint name="{sp.name}_x" type="slide" axis="1 0 0"/>',
+                    f'      <joint name="{sp.name}_z" type="slide" axis="0 0 1"/>',
+                    f'      <joint name="{sp.name}_th" type="hinge" axis="0 -1 0"/>',
+                    f'      <inertial pos="0 0 0" mass="{_f(sp.mass)}" '
+                    f'diaginertia="{_vec(ixx, iyy, izz)}"/>',
+                    f'      <geom name="{sp.name}" type="box" '
+                    f'size="{_vec(sp.half_width, 0.5 * sp.depth, sp.half_height)}"/>']
+            if dev and i != 1:
+                j = 0 if i == 0 else 1
                 out.append(f'      <site name="P{j}" pos="{_vec(0.0, 0.0, -sp.half_height)}"/>')
                 out.append(f'      <site name="Q{j}" pos="{_vec(0.0, 0.0, sp.half_height)}"/>')
-                out.append(f'      <site name="C{j}l" pos="{_vec(-sp.half_width, 0.0, -sp.half_height)}"/>')
-                out.append(f'      <site name="C{j}r" pos="{_vec(sp.half_width, 0.0, -sp.half_height)}"/>')
-            if dev and sp.name == "beam":
-                for j, idx in enumerate((0, 2)):
-                    c = specs[idx]
+                if heel:
+                    for side, sx in (("l", -1.0), ("r", 1.0)):
+                        out.append(f'      <site name="C{j}{side}" pos="'
+                                   f'{_vec(sx * sp.half_width, 0.0, -sp.half_height)}"/>')
+            if dev and i == 1:
+                for j, c in columns:
                     out.append(f'      <site name="T{j}" pos="'
                                f'{_vec(c.x - sp.x, 0.0, c.y + c.half_height - sp.y)}"/>')
             out.append('    </body>')
         out.append('  </worldbody>')
-        pairs = []
         if frame:
-            right_base = "step" if fd.step_x0 is not None else "ground"
-            pairs += [("left", "ground"), ("right", right_base), ("left", "beam"),
-                      ("right", "beam")]
+            pairs = [("left", "ground"), ("right", "step" if fd.step_x0 is not None else "ground"),
+                     ("left", "beam"), ("right", "beam")]
         else:
-            pairs.append((specs[0].name, "ground"))
+            pairs = [(specs[0].name, "ground")]
+        mu, d = cfg.friction, cfg.impedance
         out.append('  <contact>')
         for a, b in pairs:
-            out.append(f'    <pair geom1="{a}" geom2="{b}" condim="3" friction="{_vec(mu, mu, 0.005, 1e-4, 1e-4)}" '
-                       f'solref="{solref}" solimp="{solimp}"/>')
+            out.append(f'    <pair geom1="{a}" geom2="{b}" condim="3" '
+                       f'friction="{_vec(mu, mu, 0.005, 1e-4, 1e-4)}" '
+                       f'solref="{_vec(cfg.timeconst, cfg.contact_dampratio)}" '
+                       f'solimp="{_vec(d, d, 0.001, 0.5, 2.0)}"/>')
         out.append('  </contact>')
-        if dev:
-            dv = self.scene.devices
+        if dev and (dv.has_tendons or heel):
             out.append('  <tendon>')
-            for j, idx in enumerate((0, 2)):
-                sp = specs[idx]
+            for j, sp in columns:
                 if dv.has_tendons:
-                    out.append(f'    <spatial name="tendon{j}" stiffness="{_f(dv.tendon_stiffness)}" '
-                               f'springlength="{_f(2.0 * sp.half_height)}">')
-                    out.append(f'      <site site="F{j}"/><site site="P{j}"/>'
-                               f'<site site="Q{j}"/><site site="T{j}"/>')
-                    out.append('    </spatial>')
-                if dv.has_dampers:
+                    out += [f'    <spatial name="tendon{j}" stiffness="{_f(dv.tendon_stiffness)}" '
+                            f'springlength="{_f(2.0 * sp.half_height)}">',
+                            f'      <site site="F{j}"/><site site="P{j}"/><site site="Q{j}"/>'
+                            f'<site site="T{j}"/>',
+                            '    </spatial>']
+                if heel:
                     for side in ("l", "r"):
-                        out.append(f'    <spatial name="damper{j}{side}" damping="0">')
-                        out.append(f'      <site site="C{j}{side}"/><site site="R{j}{side}"/>')
-                        out.append('    </spatial>')
+                        out += [f'    <spatial name="damper{j}{side}" damping="0">',
+                                f'      <site site="C{j}{side}"/><site site="R{j}{side}"/>',
+                                '    </spatial>']
             out.append('  </tendon>')
         out.append('</mujoco>')
         return "\n".join(out)
@@ -280,70 +309,107 @@ class MujocoBackend(EngineBackend):
         import mujoco
 
         self._mj = mujoco
-        self.model = mujoco.MjModel.from_xml_string(self.mjcf())
-        self.data = mujoco.MjData(self.model)
+        self.model = m = mujoco.MjModel.from_xml_string(self.mjcf())
+        self.data = mujoco.MjData(m)
         n = len(self.specs)
-        rest = np.array([[sp.x, sp.y] for sp in self.specs])
-        self._rest = rest
+        self._rest = np.array([[sp.x, sp.y] for sp in self.specs])
         q = np.zeros(3 * n)
         for i, pose in enumerate(self.poses0):
-            q[3 * i:3 * i + 3] = (pose[0] - rest[i, 0], pose[1] - rest[i, 1], pose[2])
+            q[3 * i:3 * i + 3] = (pose[0] - self._rest[i, 0], pose[1] - self._rest[i, 1], pose[2])
         self.data.qpos[:] = q
         self.data.qvel[:] = 0.0
-        mujoco.mj_forward(self.model, self.data)
-        # damper tendons: ids of (left corner, right corner) per column, their rest sites
-        self._dampers = []
-        m = self.model
-        if self.scene.has_devices and self.native_devices and n == 3 \
-                and self.scene.devices.has_dampers:
+        # native devices: (tendon id, spring length), damped columns (hinge dof, b, heel ids)
+        self._tendons: list[tuple[int, float]] = []
+        self._damped: list[tuple[int, float, tuple[int, int] | None]] = []
+        self._c = 0.0
+        self._massvec = np.array([[sp.mass, sp.mass, sp.inertia] for sp in self.specs]).ravel()
+        if self._native():
+            dv = self.scene.devices
+            tid = lambda nm: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, nm)  # noqa: E731
             for j, idx in enumerate((0, 2)):
-                tl = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, f"damper{j}l")
-                tr = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, f"damper{j}r")
-                self._dampers.append((tl, tr))
-            self._c = float(self.scene.devices.damping)
-            self._set_heels()
+                if dv.has_tendons:
+                    t = tid(f"tendon{j}")
+                    self._tendons.append((t, float(m.tendon_lengthspring[t][0])))
+                if dv.has_dampers:
+                    heel = (tid(f"damper{j}l"), tid(f"damper{j}r")) \
+                        if self.settings.damper == "heel" else None
+                    self._damped.append((3 * idx + 2, self.specs[idx].half_width, heel))
+            self._c = float(dv.damping)
+        mujoco.mj_forward(m, self.data)
+        if self._damped:
+            self._set_dampers()
 
-    def _set_heels(self) -> None:
-        """Damp only the heel of each column: the base corner farther from its rest position
-        (the shared model's rule), using the current tendon lengths."""
-        L = self.data.ten_length
-        damp = self.model.tendon_damping
-        for tl, tr in self._dampers:
-            if L[tl] >= L[tr]:
-                damp[tl], damp[tr] = self._c, 0.0
-            else:
-                damp[tl], damp[tr] = 0.0, self._c
+    def _set_dampers(self) -> None:
+        """Set the native dampers' damping for the current state (``settings.damper``)."""
+        d, m = self.data, self.model
+        q, v = d.qpos, d.qvel
+        if self.settings.damper == "distributed":
+            power = 0.0                                       # C sum_j (dc_j/dt)^2 [W]
+            for dof, b, _ in self._damped:
+                rate = 2.0 * b * math.cos(0.5 * q[dof]) * v[dof]
+                power += self._c * rate * rate
+            ke2 = float(np.dot(self._massvec, v * v))         # 2 x kinetic energy [J]
+            # [1/s]; bounded by C (2b)^2 / I_column since ke2 >= I_column omega_j^2
+            m.dof_damping[:] = (power / ke2 if ke2 > 0.0 else 0.0) * self._massvec
+            return
+        for dof, b, heel in self._damped:
+            th = q[dof]
+            if heel is None:                                   # couple: C (dc/dtheta)^2
+                dcd = 2.0 * b * math.cos(0.5 * th)
+                m.dof_damping[dof] = self._c * dcd * dcd
+            else:                                              # heel: right corner if th >= 0
+                on, off = (heel[1], heel[0]) if th >= 0.0 else (heel[0], heel[1])
+                m.tendon_damping[on] = self._c
+                m.tendon_damping[off] = 0.0
+
+    def _native_device_report(self, devices, state, elongations):
+        """Tension k (length - 2H) [N] of each MuJoCo tendon, which is k times the shared
+        ``elongations`` (tested), and the damper force C dc/dt [N] of the scene model, in the
+        sampled ``state``."""
+        ten = [devices.k * e for e in elongations] if self._tendons else [0.0, 0.0]
+        damp = [0.0, 0.0]
+        if self._damped:
+            damp = [self._c * 2.0 * b * math.cos(0.5 * state[dof // 3][2])
+                    * math.copysign(1.0, state[dof // 3][2]) * state[dof // 3][5]
+                    for dof, b, _ in self._damped]
+        return ten, damp
 
     def _remove_devices(self) -> None:
         self.model.tendon_stiffness[:] = 0.0
         self.model.tendon_damping[:] = 0.0
-        self._dampers = []
+        self.model.dof_damping[:] = 0.0
+        self._damped = []
+        self._tendons = []
 
     def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
         m, d = self.model, self.data
         m.opt.gravity[0] = gravity_x
-        if self._dampers:
-            self._set_heels()
-        if forces:
-            mj = self._mj
-            d.qfrc_applied[:] = 0.0
-            for f in forces:
-                body = f.body + 1
-                mj.mj_applyFT(m, d, np.array([f.fx, 0.0, f.fy]), np.zeros(3),
-                              np.array([f.px, 0.0, f.py]), body, d.qfrc_applied)
+        if self._damped:
+            self._set_dampers()
+        if not forces:
             self._mj.mj_step(m, d)
-            d.qfrc_applied[:] = 0.0
-        else:
-            self._mj.mj_step(m, d)
+            return
+        # planar generalized forces on (slide x, slide z, hinge): the hinge's anchor is the
+        # centre of mass, so its generalized force is the counterclockwise moment about it
+        qf, q = d.qfrc_applied, d.qpos
+        qf[:] = 0.0
+        for f in forces:
+            i = 3 * f.body
+            rx = f.px - (self._rest[f.body, 0] + q[i])
+            ry = f.py - (self._rest[f.body, 1] + q[i + 1])
+            qf[i] += f.fx
+            qf[i + 1] += f.fy
+            qf[i + 2] += rx * f.fy - ry * f.fx
+        self._mj.mj_step(m, d)
+        qf[:] = 0.0
 
     def _state(self) -> np.ndarray:
         n = len(self.specs)
         q = self.data.qpos.reshape(n, 3)
-        v = self.data.qvel.reshape(n, 3)
         out = np.empty((n, 6))
         out[:, 0:2] = self._rest + q[:, 0:2]
         out[:, 2] = q[:, 2]
-        out[:, 3:6] = v
+        out[:, 3:6] = self.data.qvel.reshape(n, 3)
         return out
 
     def _close(self) -> None:

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..constants import G
 from ..errors import ParameterError
-from .base import EngineBackend, EngineSettings, PointForce
+from .base import DAMPER_MODELS, EngineBackend, EngineSettings, PointForce
 
 __all__ = ["PymunkBackend", "PymunkSettings"]
 
@@ -30,9 +30,10 @@ class PymunkSettings(EngineSettings):
     collision_bias : fraction of overlap left uncorrected after 1 s (pymunk default (1-0.1)^60).
     """
 
-    iterations: int = 10
+    iterations: int = 30
     collision_slop: float = 1e-4
     collision_bias: float = (1.0 - 0.1) ** 60
+    damper: str = "distributed"
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -42,6 +43,8 @@ class PymunkSettings(EngineSettings):
             raise ParameterError("collision_slop", self.collision_slop, "in [0, 0.01) m")
         if not (0.0 <= self.collision_bias < 1.0):
             raise ParameterError("collision_bias", self.collision_bias, "in [0, 1)")
+        if self.damper not in DAMPER_MODELS:
+            raise ParameterError("damper", self.damper, f"one of {', '.join(DAMPER_MODELS)}")
 
 
 class PymunkBackend(EngineBackend):

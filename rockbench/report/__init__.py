@@ -14,4 +14,4 @@ from __future__ import annotations
 from .campaign import run_campaign
 from .html import write_case_report
 
-__all__ = ["write_case_report", "run_campaign"]
+__all__ = ["run_campaign", "write_case_report"]

@@ -33,20 +33,30 @@ import os
 import pickle
 import time
 import uuid
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
 from . import figures as F
 from . import html as H
 
-__all__ = ["run_campaign", "campaign_plan", "find_records", "SCENES", "PULSE_POINTS",
-           "PULSE_SHAPES", "MAP_A", "MAP_W", "DT_SWEEP", "FREE_PHI0_OVER_ALPHA",
-           "RECORD_FRAMES", "CAMPAIGN_COLUMNS"]
+__all__ = [
+    "CAMPAIGN_COLUMNS",
+    "DT_SWEEP",
+    "FREE_PHI0_OVER_ALPHA",
+    "MAP_A",
+    "MAP_W",
+    "PULSE_POINTS",
+    "PULSE_SHAPES",
+    "RECORD_FRAMES",
+    "SCENES",
+    "campaign_plan",
+    "find_records",
+    "run_campaign",
+]
 
 #: The paper's frames (built-in scenes).
 SCENES = ("paper-symmetric", "paper-asymmetric", "paper-symmetric-hybrid",
@@ -114,7 +124,9 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "real_time_factor": "-, simulated s per wall s of stepping",
         "run_s": "s, whole run (model building and per-step work included)",
         "run_real_time_factor": "-, simulated s per wall s of the whole run",
-        "sim_time": "s, simulated time"},
+        "sim_time": "s, simulated time",
+        "ref_real_time_factor": "-, the analytic reference on the same case (integration only)",
+        "ref_run_real_time_factor": "-, the analytic reference, whole run"},
     "overturning_map.csv": {
         "backend": "-", "scene": "-", "shape": "-", "sign": "-", "A": "-", "W": "-",
         "status": "-", "overturned": "-, bool", "overturned_ref": "-, analytic verdict",
@@ -142,16 +154,16 @@ def campaign_plan(quick: bool = False) -> dict[str, Any]:
     if quick:
         return {"scenes": ("paper-asymmetric", "paper-asymmetric-hybrid-eps1"),
                 "pulse_points": ((3.0, 4.0),), "pulse_shapes": (("symmetric", 1),),
-                "pulse_tail": 2.0, "map_A": (2.0, 5.0), "map_W": (2.0, 5.0),
+                "pulse_tail": 2.0, "map_A": (2.0, 5.0), "map_W": (3.0,),
                 "map_duration_tail": 2.0, "dt_sweep": (1e-3, 5e-4),
                 "dt_case": dict(DT_CASE, A=3.0, W=4.0), "dt_tail": 2.0,
                 "free_phi0": FREE_PHI0_OVER_ALPHA, "free_duration": 3.0,
-                "max_records": 1}
+                "max_records": 1, "record_tail": 2.0}
     return {"scenes": SCENES, "pulse_points": PULSE_POINTS, "pulse_shapes": PULSE_SHAPES,
             "pulse_tail": PULSE_TAIL, "map_A": MAP_A, "map_W": MAP_W,
             "map_duration_tail": None, "dt_sweep": DT_SWEEP, "dt_case": dict(DT_CASE),
             "dt_tail": PULSE_TAIL, "free_phi0": FREE_PHI0_OVER_ALPHA,
-            "free_duration": FREE_DURATION, "max_records": None}
+            "free_duration": FREE_DURATION, "max_records": None, "record_tail": None}
 
 
 def _pulse_duration(scene_name: str, A: float, W: float, shape: str, tail: float | None):
@@ -269,7 +281,9 @@ def _run_job(job: dict[str, Any]) -> dict[str, Any]:
     t0 = time.perf_counter()
     c0 = time.process_time()
     if job["kind"] == "dt":
+        tr = time.perf_counter()
         ref = get_backend("analytic")(scene).run(motion, duration=job["duration"], phi0=phi0)
+        ref_run_s = time.perf_counter() - tr
         eng = job["engine"]
         ts = time.perf_counter()
         try:
@@ -283,7 +297,10 @@ def _run_job(job: dict[str, Any]) -> dict[str, Any]:
         row.update(dt=job["dt"], output_dt=max(job["dt"], 1e-3), run_s=run_s,
                    sim_time=float(res.cost.sim_time),
                    run_real_time_factor=float(res.cost.sim_time) / run_s if run_s > 0
-                   else math.inf)
+                   else math.inf,
+                   ref_real_time_factor=float(ref.cost.real_time_factor),
+                   ref_run_real_time_factor=float(ref.cost.sim_time) / ref_run_s
+                   if ref_run_s > 0 else math.inf)
         return {"job": job, "row": row, "n_eta": len(eta_rows(res, ref)),
                 "elapsed_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
     c = compare(scene, motion, engines=job["engines"], phi0=phi0, duration=job["duration"])
@@ -358,14 +375,29 @@ def _run_jobs(jobs: Sequence[dict[str, Any]], *, cache: Path | None, executor: s
             from concurrent.futures import ProcessPoolExecutor, as_completed
             # longest jobs first (hybrid frames and small time steps) for a balanced pool
             order = sorted(todo, key=lambda kj: -_job_weight(kj[1]))
-            with ProcessPoolExecutor(max_workers=min(workers or _cpu_count(),
-                                                     len(order))) as ex:
+            from concurrent.futures.process import BrokenProcessPool
+
+            jobs_of = dict(order)
+            broken: list[str] = []
+            ex = ProcessPoolExecutor(max_workers=min(workers or _cpu_count(), len(order)))
+            try:
                 futs = {ex.submit(_run_job_safe, job): key for key, job in order}
                 for f in as_completed(futs):
-                    done(futs[f], f.result())
+                    try:
+                        payload = f.result()
+                    except BrokenProcessPool:   # a worker died (engine crash): retry alone
+                        broken.append(futs[f])
+                        continue
+                    done(futs[f], payload)
+            finally:
+                # on Ctrl-C: drop the queued jobs at once (finished ones are already stored)
+                ex.shutdown(wait=False, cancel_futures=True)
+            for key in broken:
+                done(key, _isolated(jobs_of[key]))
         else:
             try:
-                from distributed import Client, LocalCluster, as_completed as das_completed
+                from distributed import Client, LocalCluster
+                from distributed import as_completed as das_completed
             except ImportError:
                 from ..errors import RockbenchError
                 raise RockbenchError("executor='dask' needs dask.distributed: pip install "
@@ -389,6 +421,19 @@ def _run_jobs(jobs: Sequence[dict[str, Any]], *, cache: Path | None, executor: s
         if bar is not None:
             bar.close()
     return [out[_job_key(j)] for j in jobs if _job_key(j) in out]
+
+
+def _isolated(job: dict[str, Any]) -> dict[str, Any]:
+    """Run one job in a fresh one-worker pool; a dying worker gives an error payload."""
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    with ProcessPoolExecutor(max_workers=1) as ex:
+        try:
+            return ex.submit(_run_job_safe, job).result()
+        except BrokenProcessPool as e:
+            return {"job": job, "error": f"worker process died (engine crash or out of "
+                                         f"memory?): {e}"}
 
 
 def _run_job_safe(job: dict[str, Any]) -> dict[str, Any]:
@@ -547,16 +592,16 @@ def _engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.
         es = eta_summary[eta_summary["backend"] == b] if len(eta_summary) else eta_summary
         er = es["rel_error"].astype(float).abs().dropna() if len(es) else pd.Series(dtype=float)
         va = ok["verdict_agrees"].dropna().astype(bool)
-        n_agree, n_total = int(va.sum()), int(len(va))
+        n_agree, n_total = int(va.sum()), len(va)
         if len(omap):
             m = omap[(omap["backend"] == b)]["verdict_agrees"].dropna().astype(bool)
             n_agree += int(m.sum())
-            n_total += int(len(m))
+            n_total += len(m)
         sp = speed[speed["backend"] == b] if len(speed) else speed
         versions = s["engine_version"].dropna().astype(str)
         rows.append({
             "backend": b, "engine_version": versions.iloc[0] if len(versions) else "",
-            "n_cases": int(len(s)), "n_ok": int(len(ok)),
+            "n_cases": len(s), "n_ok": len(ok),
             "nrmse_median": float(nr.median()) if len(nr) else math.nan,
             "nrmse_max": float(nr.max()) if len(nr) else math.nan,
             "peak_rel_error_median": float(pk.median()) if len(pk) else math.nan,
@@ -577,7 +622,26 @@ def _engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.
 # The conclusion
 # ==========================================================================================
 def _pct(x: float) -> str:
-    return f"{100.0 * x:.2f} %"
+    """A percentage with 2 decimals, "n/a" when missing."""
+    return "n/a" if x is None or pd.isna(x) else f"{100.0 * x:.2f} %"
+
+
+def _is_hybrid(scene_name: str) -> bool:
+    """Whether a scene has devices (tendons, dampers)."""
+    try:
+        from ..scene import load_scene
+        return load_scene(scene_name).devices is not None
+    except Exception:  # not loadable here: judge by the name
+        return "hybrid" in str(scene_name)
+
+
+def _groups(df: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
+    """(label, rows) for the free-standing and the hybrid scenes of ``df`` (column scene)."""
+    if not len(df):
+        return []
+    hyb = df["scene"].map({s: _is_hybrid(s) for s in df["scene"].unique()}).astype(bool)
+    out = [("free-standing frames", df[~hyb]), ("hybrid frames", df[hyb])]
+    return [(k, v) for k, v in out if len(v)]
 
 
 def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summary: pd.DataFrame,
@@ -588,7 +652,12 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
     lines: list[str] = []
     eng = engines[engines["backend"] != "analytic"] if len(engines) else engines
     ranked = eng[eng["n_ok"] > 0].sort_values("nrmse_median") if len(eng) else eng
-    if not len(ranked):
+    pulses = metrics[(metrics["part"] == "pulse") & (metrics["backend"] != "analytic")] \
+        if len(metrics) else metrics
+    order = list(ranked["backend"]) if len(ranked) else []
+    if not len(eng):
+        lines.append("Only the analytic reference ran: there is no engine to compare.")
+    elif not len(ranked):
         lines.append("No engine finished a pulse case cleanly: nothing to compare with the "
                      "analytic model.")
     else:
@@ -606,6 +675,17 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
                 f"that of {b['backend']}), median peak rotation error "
                 f"{_pct(r['peak_rel_error_median'])} (largest "
                 f"{_pct(r['peak_rel_error_max'])}).")
+        ok = pulses[pulses["status"] == "ok"]
+        for label, g in _groups(ok):
+            parts = []
+            for name in order:
+                s = g[g["backend"] == name]
+                if len(s):
+                    parts.append(f"{name} {s['nrmse'].median():.3g} / "
+                                 f"{_pct(s['peak_rel_error'].abs().median())}")
+            if parts:
+                lines.append(f"Pulse cases on {label}, median nrmse / median |peak error|: "
+                             + ", ".join(parts) + ".")
     if len(eng):
         f = eng.loc[eng["real_time_factor_median"].astype(float).fillna(-1).idxmax()]
         sent = (f"Fastest engine: {f['backend']}, median real-time factor "
@@ -622,17 +702,21 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
         es = eta_summary[eta_summary["backend"] != "analytic"].dropna(subset=["rel_error"])
         for b, g in es.groupby("backend", sort=False):
             worst = g.loc[g["rel_error"].abs().idxmax()]
+            per = "; ".join(f"{label} {_pct(x['rel_error'].abs().mean())}"
+                            for label, x in _groups(g))
             lines.append(
                 f"Free rocking: the effective eta of {b} is off the analytic eta by "
-                f"{_pct(g['rel_error'].abs().mean())} on average over scenes and directions; "
-                f"worst {worst['scene']} ({'counterclockwise' if worst['direction'] == 1 else 'clockwise'}): "
+                f"{_pct(g['rel_error'].abs().mean())} on average over scenes and directions "
+                f"({per}); worst {worst['scene']} "
+                f"({'counterclockwise' if worst['direction'] == 1 else 'clockwise'}): "
                 f"{worst['eta_mean']:.4f} against {worst['eta_ref']:.4f} "
                 f"({100 * worst['rel_error']:+.2f} %).")
     if len(omap):
         n_pts = int((omap["backend"] == "analytic").sum())
         for b in [x for x in F._order(omap["backend"]) if x != "analytic"]:
             s = omap[omap["backend"] == b]
-            dis = s[s["verdict_agrees"].fillna(True).astype(bool) == False]  # noqa: E712
+            dis = s[s["verdict_agrees"].fillna(True).astype(bool) == False]
+            nok = s[s["status"] != "ok"]
             if len(dis):
                 pts = ", ".join(f"(A={a:g}, W={w:g}: {'overturns' if bool(o) else 'survives'})"
                                 for a, w, o in zip(dis["A"], dis["W"], dis["overturned"]))
@@ -641,54 +725,71 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
                              f"{'s' if len(dis) > 1 else ''}: {pts}.")
             else:
                 lines.append(f"Overturning map ({MAP_SCENE}, {n_pts} points): {b} agrees with "
-                             f"every analytic verdict.")
+                             f"every analytic verdict"
+                             + (f" it could give ({len(nok)} run{'s' if len(nok) > 1 else ''} "
+                                f"not ok)." if len(nok) else "."))
     if len(metrics):
-        pulses = metrics[(metrics["part"] == "pulse") & (metrics["backend"] != "analytic")]
-        dis = pulses[pulses["verdict_agrees"].fillna(True).astype(bool) == False]  # noqa: E712
+        dis = pulses[pulses["verdict_agrees"].fillna(True).astype(bool) == False]
         for _, r in dis.iterrows():
             what = "overturns" if bool(r["overturned"]) else "survives"
             lines.append(f"{r['backend']} {what} under {r['case']}, unlike the analytic "
                          f"model.")
         bad = metrics[~metrics["status"].isin(["ok", "unavailable"])]
-        for _, r in bad.iterrows():
-            lines.append(f"{r['backend']} did not finish {r['case']} cleanly ({r['status']}): "
-                         f"{r['reason'] or 'no reason given'}.")
-        gained = pulses[pulses["energy_gained_at_impact"].fillna(False).astype(bool)]
-        for b, g in gained.groupby("backend", sort=False):
-            lines.append(f"{b} gained energy at an impact in {len(g)} of "
-                         f"{int((pulses['backend'] == b).sum())} pulse cases (an effective "
-                         f"eta >= 1, or kinetic energy that grows across an impact).")
+        for case, g in bad.groupby("case", sort=False):
+            refrow = metrics[(metrics["case"] == case) & (metrics["backend"] == "analytic")]
+            verdict = ""
+            if len(refrow) and pd.notna(refrow.iloc[0]["overturned"]):
+                verdict = (" (the analytic model overturns there)"
+                           if bool(refrow.iloc[0]["overturned"]) else
+                           " (the analytic model survives there)")
+            who = ", ".join(f"{r['backend']} ({r['status']}: {r['reason'] or 'no reason'})"
+                            for _, r in g.iterrows())
+            lines.append(f"{case}: not finished cleanly by {who}{verdict}.")
         if not len(bad):
-            lines.append("No run diverged.")
+            lines.append("No pulse or free-rocking run diverged.")
+        flags = pulses[pulses["status"] == "ok"]
+        for b in order:
+            parts = []
+            for label, g in _groups(flags[flags["backend"] == b]):
+                n = int(g["energy_gained_at_impact"].fillna(False).astype(bool).sum())
+                parts.append(f"{n} of {len(g)} on {label}")
+            if parts:
+                lines.append(f"Energy gained at an impact (an effective eta >= 1, or kinetic "
+                             f"energy that grows across an impact), {b}: " + ", ".join(parts)
+                             + " (pulse cases).")
     if len(speed):
         for b in [x for x in F._order(speed["backend"]) if x != "analytic"]:
             s = speed[(speed["backend"] == b)].sort_values("dt")
             okk = s[s["status"] == "ok"]
-            bad = s[s["status"] != "ok"]
             if len(okk) >= 2:
                 lo, hi = okk.iloc[0], okk.iloc[-1]
                 lines.append(f"Time step ({b}): dt = {hi['dt']:g} s gives nrmse "
                              f"{hi['nrmse']:.3g} at a real-time factor of "
                              f"{hi['real_time_factor']:.3g}; dt = {lo['dt']:g} s gives "
                              f"{lo['nrmse']:.3g} at {lo['real_time_factor']:.3g}.")
-            for _, r in bad.iterrows():
+            for _, r in s[s["status"] == "error"].iterrows():
+                lines.append(f"{b} at dt = {r['dt']:g} s was not run: {r.get('reason') or ''}.")
+            for _, r in s[~s["status"].isin(["ok", "error"])].iterrows():
                 lines.append(f"{b} at dt = {r['dt']:g} s did not finish cleanly "
                              f"({r['status']}): {r.get('reason') or ''}.")
     if len(records):
         ref = records[records["backend"] == "analytic"]
         for frame, g in ref.groupby("frame", sort=False):
-            n_ot = int(g["overturned"].fillna(False).astype(bool).sum())
-            lines.append(f"Records, {frame} frame: the analytic model overturns in {n_ot} of "
-                         f"{len(g)} record runs (both polarities); largest peak "
-                         f"max |phi| / alpha of the others "
-                         f"{g.loc[~g['overturned'].fillna(False).astype(bool), 'max_abs_phi_over_alpha'].max():.3g}.")
+            ot = g["overturned"].fillna(False).astype(bool)
+            rest = g.loc[~ot, "max_abs_phi_over_alpha"]
+            lines.append(f"Records, {frame} frame: the analytic model overturns in "
+                         f"{int(ot.sum())} of {len(g)} record runs (both polarities)"
+                         + (f"; largest peak max |phi| / alpha of the others "
+                            f"{rest.max():.3g}." if len(rest) else "."))
         for b in [x for x in F._order(records["backend"]) if x != "analytic"]:
             s = records[records["backend"] == b]
             v = s["verdict_agrees"].dropna().astype(bool)
             pk = s["peak_rel_error"].astype(float).abs().dropna()
+            nok = int((s["status"] != "ok").sum())
             lines.append(f"Records, {b}: {int(v.sum())} of {len(v)} verdicts agree with the "
                          f"analytic model; median |peak error| "
-                         f"{_pct(pk.median()) if len(pk) else 'n/a'}.")
+                         f"{_pct(pk.median()) if len(pk) else 'n/a'}"
+                         + (f"; {nok} run{'s' if nok > 1 else ''} not ok." if nok else "."))
     return lines
 
 
@@ -806,7 +907,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     speed_cols = ["backend", "dt", "output_dt", "status", "reason", "nrmse", "peak_rel_error",
                   "max_abs_error_over_alpha", "n_impacts", "n_impacts_ref", "eta_max_rel_error",
                   "verdict_agrees", "real_time_factor", "wall_s", "steps", "run_s",
-                  "run_real_time_factor", "sim_time", "engine_version"]
+                  "run_real_time_factor", "sim_time", "engine_version",
+                  "ref_real_time_factor", "ref_run_real_time_factor"]
     speed = pd.DataFrame(speed_rows)
     for c in speed_cols:
         if c not in speed:
@@ -839,13 +941,19 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
             recs = recs[: plan["max_records"]]
         rec_cases = []
         for rec in recs:
+            rec_duration = None
+            if plan["record_tail"] is not None:
+                from ..scene.records import load_record
+                r = load_record(rec["path"], dt=rec["dt"], units=rec["units"])
+                rec_duration = float(r.t_end - r.t_start + plan["record_tail"])
             for frame, scene in RECORD_FRAMES.items():
                 for pol in (1.0, -1.0):
                     m = {"kind": "record", "path": rec["path"], "scale": pol}
                     if rec["dt"] is not None:
                         m.update(dt=rec["dt"], units=rec["units"])
                     for e in names:
-                        rec_cases.append({"scene": scene, "engine": e, "motion": m})
+                        rec_cases.append({"scene": scene, "engine": e, "motion": m,
+                                          "duration": rec_duration})
         rows = _sweep_rows(_sweep(rec_cases, store=sweep_store, **run))
         if len(rows):
             byscene = {v: k for k, v in RECORD_FRAMES.items()}
@@ -911,7 +1019,7 @@ def _runtime_html(timings: Mapping[str, float], total: float, workers: int,
 def _page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, engines_tab,
                    speed, omap, records, lines, notes, figdir, *, quick, records_dir,
                    store_dir, engine_rows, files) -> list[tuple[str, str, str]]:
-    from ..compare import ETA_COLUMNS, METRIC_COLUMNS
+    from ..compare import METRIC_COLUMNS
 
     units = {**METRIC_COLUMNS, **H.DERIVED_COLUMNS}
     for tab in CAMPAIGN_COLUMNS.values():
@@ -1002,13 +1110,13 @@ def _page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, en
     sp = []
     if len(speed):
         okk = speed[speed["status"] == "ok"]
-        ref = metrics[(metrics["backend"] == "analytic") & (metrics["part"] == "pulse")] \
-            if len(metrics) else metrics
         rows = okk
-        if len(ref):
+        ref = okk[["ref_real_time_factor", "ref_run_real_time_factor"]].astype(float).median()
+        if len(okk) and ref.notna().all():
             rows = pd.concat([okk, pd.DataFrame([{
                 "backend": "analytic", "dt": math.nan,
-                "real_time_factor": float(ref["real_time_factor"].median())}])],
+                "real_time_factor": float(ref["ref_real_time_factor"]),
+                "run_real_time_factor": float(ref["ref_run_real_time_factor"])}])],
                 ignore_index=True)
         dc = plan["dt_case"]
         sp.append(H.figure_html(
@@ -1021,8 +1129,8 @@ def _page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, en
             f"{', '.join(f'{d:g}' for d in plan['dt_sweep'])} s. Left: engine stepping only "
             "(the Cost of the Result); right: the whole run, including model building and "
             "rockbench's per-step work (ground motion, device forces, sampling, contact "
-            "diagnostics). Dotted line: the analytic reference's median real-time factor "
-            "over the pulse cases.", name="speed_accuracy", png_dir=figdir))
+            "diagnostics). Dotted line: the analytic reference on the same case (median "
+            "over its runs in the sweep).", name="speed_accuracy", png_dir=figdir))
         sp.append(H.html_table(speed, list(CAMPAIGN_COLUMNS["speed_accuracy.csv"]),
                                units=units, scroll=True))
     sections.append(("speed-section", "Speed against accuracy", "\n".join(sp) or

@@ -29,10 +29,24 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-__all__ = ["THRESHOLDS", "GRADE_COLORS", "grade", "engine_color", "Trace", "as_trace",
-           "plot_histories", "plot_history_grid", "plot_eta", "plot_eta_summary",
-           "plot_summary_table", "plot_speed_accuracy", "plot_overturn_maps",
-           "plot_record_peaks", "png_bytes", "data_uri"]
+__all__ = [
+    "GRADE_COLORS",
+    "THRESHOLDS",
+    "Trace",
+    "as_trace",
+    "data_uri",
+    "engine_color",
+    "grade",
+    "plot_eta",
+    "plot_eta_summary",
+    "plot_histories",
+    "plot_history_grid",
+    "plot_overturn_maps",
+    "plot_record_peaks",
+    "plot_speed_accuracy",
+    "plot_summary_table",
+    "png_bytes",
+]
 
 # ------------------------------------------------------------------------------------------
 # Agreement grades

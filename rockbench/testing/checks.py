@@ -33,6 +33,13 @@ FREE_ROCKING_ETA_RTOL = 0.005
 FREE_ROCKING_NRMSE = 0.05
 
 
+def _ensure(condition: Any, message: str) -> None:
+    """Raise AssertionError(message) unless ``condition`` (unlike ``assert``, also under
+    ``python -O``)."""
+    if not condition:
+        raise AssertionError(message)
+
+
 # =========================================================================================
 # assert_agree
 # =========================================================================================
@@ -229,45 +236,49 @@ def _check_schema(result, name: str, motion, t0: float, t_end: float, is_engine:
     from ..result import (CONTACT_COLUMNS, EVENT_COLUMNS, EVENT_KINDS, HISTORY_COLUMNS, STATUSES,
                           Cost, Result, Summary)
 
-    assert isinstance(result, Result), f"run() returned {type(result).__name__}, not a Result"
-    assert result.backend == name, f"result.backend = {result.backend!r}, expected {name!r}"
-    assert isinstance(result.summary, Summary) and isinstance(result.cost, Cost), \
-        "summary / cost are not Summary / Cost"
-    assert result.summary.status in STATUSES, f"status {result.summary.status!r} not in {STATUSES}"
+    _ensure(isinstance(result, Result), f"run() returned {type(result).__name__}, not a Result")
+    _ensure(result.backend == name, f"result.backend = {result.backend!r}, expected {name!r}")
+    _ensure(isinstance(result.summary, Summary) and isinstance(result.cost, Cost),
+            "summary / cost are not Summary / Cost")
+    _ensure(result.summary.status in STATUSES,
+            f"status {result.summary.status!r} not in {STATUSES}")
     h = result.history
-    assert isinstance(h, pd.DataFrame), "history is not a DataFrame"
+    _ensure(isinstance(h, pd.DataFrame), "history is not a DataFrame")
     need = list(HISTORY_COLUMNS) + (list(CONTACT_COLUMNS) if is_engine else [])
     missing = [c for c in need if c not in h.columns]
-    assert not missing, f"history lacks columns {missing}"
-    assert len(h) >= 2, f"history has {len(h)} rows"
+    _ensure(not missing, f"history lacks columns {missing}")
+    _ensure(len(h) >= 2, f"history has {len(h)} rows")
     for c in need:
         if c == "mode":
-            assert pd.api.types.is_integer_dtype(h[c]), f"history.mode dtype {h[c].dtype}, not int"
-            assert set(np.unique(h[c])) <= {-1, 0, 1}, "history.mode outside {-1, 0, +1}"
+            _ensure(pd.api.types.is_integer_dtype(h[c]),
+                    f"history.mode dtype {h[c].dtype}, not int")
+            _ensure(set(np.unique(h[c])) <= {-1, 0, 1}, "history.mode outside {-1, 0, +1}")
         elif c == "devices_intact":
-            assert pd.api.types.is_bool_dtype(h[c]), f"devices_intact dtype {h[c].dtype}, not bool"
+            _ensure(pd.api.types.is_bool_dtype(h[c]),
+                    f"devices_intact dtype {h[c].dtype}, not bool")
         else:
-            assert h[c].dtype == np.float64, f"history.{c} dtype {h[c].dtype}, not float64"
+            _ensure(h[c].dtype == np.float64, f"history.{c} dtype {h[c].dtype}, not float64")
     t = h["t"].to_numpy()
     dt = np.diff(t)
-    assert np.all(dt > 0), "history.t is not strictly increasing"
-    assert np.ptp(dt) <= 1e-9 * max(1.0, abs(t[-1])) + 1e-9 * dt.mean(), \
-        f"history.t is not a uniform grid (steps {dt.min():.6g}..{dt.max():.6g} s)"
+    _ensure(np.all(dt > 0), "history.t is not strictly increasing")
+    _ensure(np.ptp(dt) <= 1e-9 * max(1.0, abs(t[-1])) + 1e-9 * dt.mean(),
+            f"history.t is not a uniform grid (steps {dt.min():.6g}..{dt.max():.6g} s)")
     odt = getattr(result.settings, "get", lambda *_: None)("output_dt")
     if odt is not None:
-        assert math.isclose(dt.mean(), odt, rel_tol=1e-6), \
-            f"history.t step {dt.mean():.6g} s != settings output_dt {odt:g} s"
-    assert math.isclose(t[0], t0, abs_tol=1e-9), f"history starts at {t[0]:.6g} s, not {t0:.6g} s"
+        _ensure(math.isclose(dt.mean(), odt, rel_tol=1e-6),
+                f"history.t step {dt.mean():.6g} s != settings output_dt {odt:g} s")
+    _ensure(math.isclose(t[0], t0, abs_tol=1e-9),
+            f"history starts at {t[0]:.6g} s, not {t0:.6g} s")
     if not result.summary.overturned:
-        assert math.isclose(t[-1], t_end, abs_tol=1e-6 + dt.mean()), \
-            f"history ends at {t[-1]:.6g} s, not {t_end:.6g} s"
+        _ensure(math.isclose(t[-1], t_end, abs_tol=1e-6 + dt.mean()),
+                f"history ends at {t[-1]:.6g} s, not {t_end:.6g} s")
     ev = result.events
     missing = [c for c in EVENT_COLUMNS if c not in ev.columns]
-    assert not missing, f"events lack columns {missing}"
+    _ensure(not missing, f"events lack columns {missing}")
     bad = set(ev["kind"]) - set(EVENT_KINDS)
-    assert not bad, f"unknown event kinds {sorted(bad)}"
-    assert result.motion == (motion.describe() if motion is not None else {"kind": "none"}), \
-        "result.motion is not motion.describe()"
+    _ensure(not bad, f"unknown event kinds {sorted(bad)}")
+    _ensure(result.motion == (motion.describe() if motion is not None else {"kind": "none"}),
+            "result.motion is not motion.describe()")
     return f"{len(h)} rows x {h.shape[1]} columns, dt_out = {dt.mean():.3g} s, {len(ev)} events"
 
 
@@ -276,30 +287,32 @@ def _check_units(result, motion, scene) -> str:
     t = h["t"].to_numpy()
     acc = motion.acceleration(t)
     err = float(np.max(np.abs(h["ground_acc"].to_numpy() - acc)))
-    assert err <= 1e-9 * motion.peak + 1e-12, \
-        f"ground_acc differs from motion.acceleration(t) by up to {err:.3g} m/s^2 (units m/s^2?)"
+    _ensure(err <= 1e-9 * motion.peak + 1e-12,
+            f"ground_acc differs from motion.acceleration(t) by up to {err:.3g} m/s^2 "
+            "(units m/s^2?)")
     phi = h["phi"].to_numpy()
     mx = float(np.max(np.abs(phi)))
-    assert math.isclose(result.summary.max_abs_phi, mx, rel_tol=1e-9, abs_tol=1e-15), \
-        f"summary.max_abs_phi = {result.summary.max_abs_phi:.6g} rad != max|history.phi| " \
-        f"= {mx:.6g} rad"
-    assert math.isclose(result.summary.max_abs_phi_over_alpha, mx / scene.alpha, rel_tol=1e-9,
-                        abs_tol=1e-15), "summary.max_abs_phi_over_alpha != max|phi| / alpha"
+    _ensure(math.isclose(result.summary.max_abs_phi, mx, rel_tol=1e-9, abs_tol=1e-15),
+            f"summary.max_abs_phi = {result.summary.max_abs_phi:.6g} rad != max|history.phi| "
+            f"= {mx:.6g} rad")
+    _ensure(math.isclose(result.summary.max_abs_phi_over_alpha, mx / scene.alpha,
+                         rel_tol=1e-9, abs_tol=1e-15),
+            "summary.max_abs_phi_over_alpha != max|phi| / alpha")
     grad = np.gradient(phi, t)
     pdot = h["phidot"].to_numpy()
     scale = float(np.max(np.abs(pdot)))
-    assert scale > 0, "phidot is identically zero while phi moves"
+    _ensure(scale > 0, "phidot is identically zero while phi moves")
     moving = np.abs(pdot) > 0.05 * scale
     dev = float(np.median(np.abs(grad[moving] - pdot[moving]) / np.abs(pdot[moving])))
-    assert dev <= 0.05, \
-        f"phidot is not d(phi)/dt in rad/s: median |dphi/dt / phidot - 1| = {dev:.3g} while " \
-        f"rocking (max |phidot| = {scale:.3g} rad/s)"
+    _ensure(dev <= 0.05,
+            f"phidot is not d(phi)/dt in rad/s: median |dphi/dt / phidot - 1| = {dev:.3g} while "
+            f"rocking (max |phidot| = {scale:.3g} rad/s)")
     sim = result.cost.sim_time
     span = t[-1] - t[0]
-    assert math.isclose(sim, span, rel_tol=1e-6, abs_tol=1e-6), \
-        f"cost.sim_time = {sim:.6g} s, history spans {span:.6g} s"
-    assert result.cost.wall_s >= 0 and result.cost.steps >= 1, \
-        f"cost: wall_s = {result.cost.wall_s}, steps = {result.cost.steps}"
+    _ensure(math.isclose(sim, span, rel_tol=1e-6, abs_tol=1e-6),
+            f"cost.sim_time = {sim:.6g} s, history spans {span:.6g} s")
+    _ensure(result.cost.wall_s >= 0 and result.cost.steps >= 1,
+            f"cost: wall_s = {result.cost.wall_s}, steps = {result.cost.steps}")
     return (f"ground_acc in m/s^2 (max error {err:.2g}), phidot = dphi/dt (median relative "
             f"deviation {dev:.2g} while rocking), summary consistent")
 
@@ -375,10 +388,10 @@ def check_backend(name, **settings: Any) -> BackendReport:
     def available():
         nonlocal ok, version
         res = cls.available()
-        assert isinstance(res, tuple) and len(res) == 2, "available() must return (bool, str)"
+        _ensure(isinstance(res, tuple) and len(res) == 2, "available() must return (bool, str)")
         ok, version = bool(res[0]), str(res[1])
         report.version = version
-        assert ok, f"not available: {version}"
+        _ensure(ok, f"not available: {version}")
         return version
 
     check("available", available)
@@ -390,13 +403,13 @@ def check_backend(name, **settings: Any) -> BackendReport:
 
     def settings_check():
         S = cls.Settings
-        assert is_dataclass(S), f"{cls.__name__}.Settings is not a dataclass"
-        assert S.__dataclass_params__.frozen, f"{cls.__name__}.Settings is not frozen"
+        _ensure(is_dataclass(S), f"{cls.__name__}.Settings is not a dataclass")
+        _ensure(S.__dataclass_params__.frozen, f"{cls.__name__}.Settings is not frozen")
         S()
         b = make()
-        assert isinstance(b.settings, S), "backend.settings is not a Settings instance"
+        _ensure(isinstance(b.settings, S), "backend.settings is not a Settings instance")
         for k, v in settings.items():
-            assert getattr(b.settings, k) == v, f"setting {k} = {v!r} was not applied"
+            _ensure(getattr(b.settings, k) == v, f"setting {k} = {v!r} was not applied")
         return f"{len(fields(S))} fields"
 
     check("settings", settings_check)
@@ -404,7 +417,7 @@ def check_backend(name, **settings: Any) -> BackendReport:
     def schema():
         r = make().run(pulse, duration=duration)
         ctx["pulse"] = r
-        assert r.ok, f"the check run is {r.status}: {r.summary.reason}"
+        _ensure(r.ok, f"the check run is {r.status}: {r.summary.reason}")
         return _check_schema(r, str(name), pulse, t0, t_end, is_engine)
 
     check("schema", schema)
@@ -422,23 +435,24 @@ def check_backend(name, **settings: Any) -> BackendReport:
         for sgn in (1, -1):
             phi0 = 0.5 * alpha * sgn
             r = make().run(None, duration=1.0, phi0=phi0)
-            assert r.ok, f"free rocking from phi0 = {phi0:+.4g} rad is {r.status}: " \
-                         f"{r.summary.reason}"
+            _ensure(r.ok,
+                    f"free rocking from phi0 = {phi0:+.4g} rad is {r.status}: "
+                    f"{r.summary.reason}")
             h = r.history
             p0 = float(h["phi"].iloc[0])
-            assert abs(p0 - phi0) <= 1e-3 * alpha, \
-                f"history starts at phi = {p0:+.6g} rad, not phi0 = {phi0:+.6g} rad"
+            _ensure(abs(p0 - phi0) <= 1e-3 * alpha,
+                    f"history starts at phi = {p0:+.6g} rad, not phi0 = {phi0:+.6g} rad")
             later = float(h.loc[h["t"] <= 0.2, "phi"].iloc[-1])
-            assert sgn * later < sgn * phi0, \
-                f"from phi0 = {phi0:+.4g} rad, phi(0.2 s) = {later:+.4g} rad: not rocking back " \
-                "towards 0 (sign convention: + counterclockwise, rotation of the left column)"
+            _ensure(sgn * later < sgn * phi0,
+                    f"from phi0 = {phi0:+.4g} rad, phi(0.2 s) = {later:+.4g} rad: not rocking back "
+                    "towards 0 (sign convention: + counterclockwise, rotation of the left column)")
             ref = gb("analytic")(scene).run(None, duration=1.0, phi0=phi0)
             from ..compare import history_error
             _, err = history_error(r, ref)
             e = float(np.sqrt(np.mean(err ** 2)))
-            assert e <= FREE_ROCKING_NRMSE, \
-                f"from phi0 = {phi0:+.4g} rad the history departs from the analytic one: RMS " \
-                f"error {e:.3g} alpha > {FREE_ROCKING_NRMSE}"
+            _ensure(e <= FREE_ROCKING_NRMSE,
+                    f"from phi0 = {phi0:+.4g} rad the history departs from the analytic one: RMS "
+                    f"error {e:.3g} alpha > {FREE_ROCKING_NRMSE}")
             out.append(f"{e:.2g}")
         return f"phi(0) = phi0, RMS error vs analytic {', '.join(out)} alpha (+phi0, -phi0)"
 
@@ -448,9 +462,9 @@ def check_backend(name, **settings: Any) -> BackendReport:
         a = ctx.get("pulse") or make().run(pulse, duration=duration)
         b = make().run(pulse, duration=duration)
         d = _same_frames(a.history, b.history)
-        assert d is None, f"two identical runs differ: history {d}"
+        _ensure(d is None, f"two identical runs differ: history {d}")
         d = _same_frames(a.events, b.events)
-        assert d is None, f"two identical runs differ: events {d}"
+        _ensure(d is None, f"two identical runs differ: events {d}")
         return "two runs identical"
 
     check("repeatability", repeatability)
@@ -458,17 +472,19 @@ def check_backend(name, **settings: Any) -> BackendReport:
     def free_eta():
         eta_h = scene.structure.eta_housner
         r = make().run(None, duration=4.0, phi0=0.5 * alpha)
-        assert r.ok, f"free rocking run is {r.status}: {r.summary.reason}"
+        _ensure(r.ok, f"free rocking run is {r.status}: {r.summary.reason}")
         imp = r.impacts()
-        assert len(imp) >= 2, f"{len(imp)} impacts in 4 s of free rocking from alpha/2 " \
-                              "(expected 3)"
+        _ensure(len(imp) >= 2,
+                f"{len(imp)} impacts in 4 s of free rocking from alpha/2 "
+                "(expected 3)")
         e = imp["eta"].to_numpy(dtype=float)
-        assert np.all(np.isfinite(e)), f"impact eta not measured: {e}"
+        _ensure(np.all(np.isfinite(e)), f"impact eta not measured: {e}")
         rel = e / eta_h - 1
         i = int(np.argmax(np.abs(rel)))
-        assert abs(rel[i]) <= FREE_ROCKING_ETA_RTOL, \
-            f"impact {i} at t = {imp['t'].iloc[i]:.4g} s: eta = {e[i]:.5g} vs Housner " \
-            f"{eta_h:.5g}, off by {_pct(rel[i])} (tolerance {100 * FREE_ROCKING_ETA_RTOL:.2g} %)"
+        _ensure(abs(rel[i]) <= FREE_ROCKING_ETA_RTOL,
+                f"impact {i} at t = {imp['t'].iloc[i]:.4g} s: eta = {e[i]:.5g} vs Housner "
+                f"{eta_h:.5g}, off by {_pct(rel[i])} "
+                f"(tolerance {100 * FREE_ROCKING_ETA_RTOL:.2g} %)")
         return f"{len(e)} impacts, max |eta/eta_Housner - 1| = {abs(rel[i]):.2%}"
 
     check("free-rocking eta", free_eta)
@@ -490,7 +506,7 @@ def check_backend(name, **settings: Any) -> BackendReport:
                 missed.append(f"{label} raised {type(e).__name__}, not ParameterError")
                 continue
             missed.append(f"{label} did not raise")
-        assert not missed, "; ".join(missed)
+        _ensure(not missed, "; ".join(missed))
         return f"{len(cases)} bad inputs raise ParameterError"
 
     check("bad input", bad_input)
@@ -499,12 +515,13 @@ def check_backend(name, **settings: Any) -> BackendReport:
         if "max_penetration" not in {f.name for f in fields(cls.Settings)}:
             raise _Skip("no max_penetration setting to force a divergence")
         r = make(max_penetration=1e-12).run(None, duration=0.5, phi0=0.5 * alpha)
-        assert r.status == "diverged", f"status {r.status!r}, expected 'diverged' " \
-                                       "(max_penetration = 1e-12 m)"
-        assert r.summary.reason, "a diverged run must say why (summary.reason)"
+        _ensure(r.status == "diverged",
+                f"status {r.status!r}, expected 'diverged' "
+                "(max_penetration = 1e-12 m)")
+        _ensure(r.summary.reason, "a diverged run must say why (summary.reason)")
         from ..result import HISTORY_COLUMNS
         missing = [c for c in HISTORY_COLUMNS if c not in r.history.columns]
-        assert not missing, f"the diverged Result's history lacks {missing}"
+        _ensure(not missing, f"the diverged Result's history lacks {missing}")
         return f"reported: {r.summary.reason}"
 
     check("divergence reported", divergence)
