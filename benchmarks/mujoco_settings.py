@@ -51,13 +51,13 @@ cases = _load_cases()
 
 
 @functools.lru_cache(maxsize=None)
-def _scene(name):
-    return rb.load_scene(name)
+def _scene(case):
+    return case.load()     # the case's scene (overturn runs stop at the case's fall angle)
 
 
 @functools.lru_cache(maxsize=None)
 def _reference(case):
-    sc = _scene(case.scene)
+    sc = _scene(case)
     return rb.run(sc, engine="analytic", **case.kwargs(sc))
 
 
@@ -86,7 +86,7 @@ def evaluate(engine="mujoco", **kw):
             out["status"].append(f"{r.scene.name}: {s.reason}")
 
     for case in cases.FREE_CASES:
-        sc = _scene(case.scene)
+        sc = _scene(case)
         r = rb.run(sc, engine=engine, **case.kwargs(sc), **kw)
         eta = Reference(sc).eta
         errs = {1: math.nan, -1: math.nan}
@@ -98,7 +98,7 @@ def evaluate(engine="mujoco", **kw):
         out["rms"] = max(out["rms"], _rms(r, _reference(case), sc.alpha, cases.NRMSE_WINDOW))
         track(r)
     for case in cases.SURVIVE_CASES:
-        sc = _scene(case.scene)
+        sc = _scene(case)
         ref = _reference(case)
         r = rb.run(sc, engine=engine, **case.kwargs(sc), **kw)
         e = r.summary.max_abs_phi_over_alpha / ref.summary.max_abs_phi_over_alpha - 1
@@ -109,7 +109,7 @@ def evaluate(engine="mujoco", **kw):
                             r.summary.max_sliding))
         track(r)
     for case in cases.OVERTURN_CASES:
-        sc = _scene(case.scene)
+        sc = _scene(case)
         r = rb.run(sc, engine=engine, **case.kwargs(sc), **kw)
         out["n_ot"] += 1
         out["ot"] += int(r.summary.overturned)

@@ -41,19 +41,40 @@ Engines that step a rigid-body world should subclass :class:`EngineBackend`, whi
     Release engine resources (physics clients, ...).
 
 and optionally ``_remove_devices(self)`` (native devices: switch them off at fracture) and
-``_penetration(self) -> float`` (the engine's own largest contact depth [m]; by default it is
-computed from the poses).
+``_native_device_report(self, devices, state, elongations)`` (native devices: the tendon
+tensions and damper forces [N] the engine applies, for the history). A ``damper`` field in the
+adapter's Settings, if present, selects how shared damper forces reach the bodies (one of
+:data:`DAMPER_MODELS`, see :class:`DeviceGeometry`; default "couple").
 
 Counters and attributes the base class keeps: ``steps`` (engine steps), ``wall_s`` (seconds
-spent stepping, building excluded).
+spent in ``_step``, building and the Python loop excluded), ``specs``, ``foundation``,
+``poses0`` (set before ``_build``).
 
-Shared machinery here: body and foundation specifications from the scene, initial poses for a
-given phi0 from the mechanism kinematics, ground motion as gravity, tendon and damper forces from
-poses and velocities (the scene model's geometry: tendon elongation = base opening + top opening;
-damper along the heel-corner chord), fracture, output sampling on a fixed grid, event detection
-(uplift, impacts with the effective eta measured from the engine's motion, fracture, overturn),
-contact diagnostics (penetration, sliding, pivots that open) from the poses, and divergence
-detection.
+What ``run`` does, once for every engine
+----------------------------------------
+* Time: ``run_window`` (start at the motion's ``t_start``, or 0 for free rocking); steps of
+  ``dt`` with gravity ``(-u_g''(t + dt/2), -g)``; the initial poses place every body on the
+  exact mechanism at phi0, at rest.
+* Devices (frames with tendons/dampers, unless native): :class:`DeviceGeometry` point forces
+  from the poses and velocities before every step (tendon elongation = base opening + top
+  opening; dampers on the heel-corner chord of each column's rotation); fracture when either
+  tendon's strain reaches eps_f, after which no device force acts (native ones are removed).
+* Output: the state linearly interpolated between steps onto the analytic backend's grid
+  (:func:`output_grid`); phi, phidot = the left column's (block's) rotation and rate; device
+  columns from the sampled states by the same formulas as the forces.
+* Contacts: :class:`ContactProbe` on the sampled poses: penetration, sliding of a contact
+  point from its rest position while touching, and whether a contact the analytic model keeps
+  closed opened (history columns and summary maxima).
+* Events from the sampled motion (:func:`excursions`, :func:`measure_impacts`): uplift (an
+  excursion that starts from rest, timed back to the last sample at rest in rate), impacts with
+  the effective eta (energy of successive peaks for free rocking, windowed velocity fits
+  otherwise), fracture, overturn (|phi| reaches the scene's fall angle; the run stops).
+* Divergence (``summary.status == "diverged"`` with ``reason``, never an exception): an
+  exception from the engine or the adapter, a non-finite state, penetration or sliding above
+  ``max_penetration`` / ``max_sliding`` (checked every 500 samples and at the end), mechanical
+  energy growing by more than ``energy_gain_tol`` without input (free rocking: every step,
+  from the bodies' states; after the ground motion ends: the potential at successive peaks).
+  The Result still carries the history up to the failure.
 """
 
 from __future__ import annotations
@@ -260,14 +281,26 @@ class DeviceGeometry:
     penetration and slip (micrometres, with large velocities in an impact step) cannot turn the
     damper (C ~ 1e7 N s/m) into a spurious force on a pivot.
 
-    ``damper="couple"`` (default) applies the damper's moment -C (dc_j/dt) dc_j/dtheta_j to the
-    column as a pure couple (two opposite horizontal forces); ``damper="heel"`` applies the
-    force -C (dc_j/dt) u at the heel corner. Both have the virtual power -C (dc_j/dt)^2 of the
-    analytic model's D phi'^2 term. The couple is the default because the analytic model keeps
-    every pivot closed, while the paper's dampers (25.3 MN s/m) push the heel with 2-5 MN, more
-    than the 1 MN of dead load on a column's pivot: applied at the heel they lift the column
-    off its pivot in an engine (measured in pymunk: pivots open, 1.5-2.5 cm of slip, peaks off
-    by up to 20 %), a behaviour outside the model the engines are compared with.
+    How the damper force reaches the bodies (``damper``; every model has the virtual power
+    -C sum_j (dc_j/dt)^2, the analytic model's -D phi'^2, for the mechanism's motion):
+
+    * "heel": the force -C (dc_j/dt) u at the heel corner, as a real damper would act;
+    * "couple": its moment -C (dc_j/dt) dc_j/dtheta_j on the column as a pure couple (two
+      opposite horizontal forces), with no resultant to lift the column;
+    * "distributed": the total damper power taken from every body in proportion to its
+      momentum, F_i = -lambda m_i v_i and M_i = -lambda I_i omega_i with lambda = C sum_j
+      (dc_j/dt)^2 / sum_i (m_i v_i^2 + I_i omega_i^2): on the mechanism it is the analytic
+      D phi' exactly, and, acting like an inertial field, it needs no contact to transmit it.
+
+    Why it matters: the analytic model keeps every pivot closed, but the paper's dampers
+    (25.3 MN s/m) exert 2-6 MN, more than the 1 MN of dead load on a column's pivot. At the
+    heel they lift the column off its pivot in the closing half-cycle; as a couple they spin a
+    column as soon as a contact opens for one step, which Chipmunk's first-order position update
+    does every so often (the beam resting on a rotating column drifts off it by a dt^2 term).
+    Measured in pymunk on the hybrid cases of ``tests/engines/cases.py``: heel, up to 1 m of
+    slip and 13 of 32 runs diverged; couple, 4 cm of slip and peaks 3.8 % off; distributed,
+    0.8 mm and 0.3 %. Engines whose contacts stay closed (soft, penetrating contacts) may use
+    the couple.
     """
 
     def __init__(self, scene: Scene, specs: list[BodySpec], damper: str = "couple"):
@@ -399,13 +432,15 @@ def net_wrenches(forces: list[PointForce], state: np.ndarray) -> np.ndarray:
     """(n_bodies, 3): the resultant force fx, fy [N] and moment about each body's centre of
     mass [N m] of ``forces`` for the bodies' ``state`` (n_bodies, 6). For engines that apply a
     force and a torque per body rather than forces at points."""
-    out = np.zeros((len(state), 3))
+    pos = [(float(st[0]), float(st[1])) for st in state]
+    out = [[0.0, 0.0, 0.0] for _ in pos]
     for f in forces:
-        x, y = state[f.body][0], state[f.body][1]
-        out[f.body, 0] += f.fx
-        out[f.body, 1] += f.fy
-        out[f.body, 2] += (f.px - x) * f.fy - (f.py - y) * f.fx
-    return out
+        x, y = pos[f.body]
+        w = out[f.body]
+        w[0] += f.fx
+        w[1] += f.fy
+        w[2] += (f.px - x) * f.fy - (f.py - y) * f.fx
+    return np.array(out)
 
 
 # =========================================================================================

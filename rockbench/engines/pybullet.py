@@ -47,7 +47,7 @@ import numpy as np
 
 from ..constants import G
 from ..errors import ParameterError
-from .base import EngineBackend, EngineSettings, PointForce
+from .base import DAMPER_MODELS, EngineBackend, EngineSettings, PointForce
 
 __all__ = ["PybulletBackend", "PybulletSettings"]
 
@@ -61,8 +61,9 @@ class PybulletSettings(EngineSettings):
     """PyBullet settings (see ``docs/engines/pybullet.md`` for the measurements behind them).
 
     solver_iterations : constraint solver iterations per step (Bullet default 50), integer >= 1.
-    contact_erp : error reduction parameter of contacts, in (0, 1] (the fraction of penetration
-        removed per step; pybullet's default 0.2 for multibody contacts). Used when
+    contact_erp : error reduction parameter of contacts, in (0, 1]: the fraction of a contact's
+        penetration removed per step (pybullet's own default, 0.08, measured best: 0.2 lets
+        pivots slip 3 mm in an overturn, 0.5 and 0.8 centimetres). Used when
         ``contact_stiffness`` is 0.
     contact_stiffness, contact_damping : explicit contact stiffness [N/m] and damping [N s/m]
         (Bullet turns them into a per-contact ERP/CFM); 0 and 0 (the default) keep Bullet's
@@ -71,20 +72,29 @@ class PybulletSettings(EngineSettings):
         points (Bullet default 0.02 m biased the response; 1e-3 m), in (0, 0.05].
     friction_anchor : keep the friction anchor of persistent contact points (removes pivot
         creep), bool.
-    solver : "si" (sequential impulse, Bullet's default; the only one that works here: LCP_PGS
-        gives NaN) or "dantzig".
+    solver : constraint solver, "si" (Bullet's sequential impulse, its default). The only
+        choice: Bullet's MLCP solvers were measured and rejected (LCP_PGS: NaN on the first
+        step; LCP_DANTZIG: bit-identical results on these scenes, and it prints to stdout).
     virtual_mass_ratio : mass of each of the two virtual links of the planar joint chain as a
         fraction of the body's mass, in (0, 1e-3].
+    damper : how the shared machinery applies the dampers' force (one of
+        :data:`rockbench.engines.base.DAMPER_MODELS`): "distributed" (default: forces in
+        proportion to every body's momentum that dissipate exactly the damper's power and
+        change no contact reaction), "couple" (a couple on each column) or "heel" (the force
+        at the heel corner). With "couple" the right column's velocity chatters in Bullet's
+        contact solver and the explicit 25 MN s/m damper amplifies it: the frame slides
+        metres (docs/engines/pybullet.md).
     """
 
     solver_iterations: int = 50
-    contact_erp: float = 0.2
+    contact_erp: float = 0.08
     contact_stiffness: float = 0.0
     contact_damping: float = 0.0
     contact_breaking_threshold: float = 1e-3
     friction_anchor: bool = True
     solver: str = "si"
     virtual_mass_ratio: float = 1e-6
+    damper: str = "distributed"
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -110,13 +120,16 @@ class PybulletSettings(EngineSettings):
         vm = self.virtual_mass_ratio
         if not (isinstance(vm, (int, float)) and 0.0 < vm <= 1e-3):
             raise ParameterError("virtual_mass_ratio", vm, "in (0, 1e-3]")
+        if self.damper not in DAMPER_MODELS:
+            raise ParameterError("damper", self.damper, f"one of {', '.join(DAMPER_MODELS)}")
         if self.friction > _BULLET_MAX_FRICTION:
             raise ParameterError("friction", self.friction,
                                  f"<= {_BULLET_MAX_FRICTION:g} (Bullet clamps the pair's product)")
 
 
-#: settings.solver -> name of the pybullet constant
-_SOLVERS = {"si": "CONSTRAINT_SOLVER_LCP_SI", "dantzig": "CONSTRAINT_SOLVER_LCP_DANTZIG"}
+#: settings.solver -> name of the pybullet constant (benchmarks/pybullet_settings.py adds the
+#: rejected MLCP solvers to measure them)
+_SOLVERS = {"si": "CONSTRAINT_SOLVER_LCP_SI"}
 
 
 class PybulletBackend(EngineBackend):

@@ -20,12 +20,14 @@ Its parts (``docs/report.md`` describes the page and every table):
    :func:`rockbench.sweep.run_cases`).
 
 Everything finished is kept in a store (default ``out_dir/store``): the comparisons as small
-pickles, the sweep cases in the sweep's Parquet store. A rerun, e.g. after Ctrl-C, reuses what
-finished. Delete the store to start afresh (it is keyed by the case, not by the code version).
+pickles, the sweep cases in the sweep's Parquet store, both under a fingerprint of the physics
+code (:func:`code_fingerprint`). A rerun, e.g. after Ctrl-C, reuses what finished; after a
+change to a backend, the scene model or an engine version, everything runs again.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -44,6 +46,7 @@ from . import figures as F
 from . import html as H
 
 __all__ = [
+    "code_fingerprint",
     "CAMPAIGN_COLUMNS",
     "DT_SWEEP",
     "FREE_PHI0_OVER_ALPHA",
@@ -246,6 +249,29 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
 # ==========================================================================================
 # Comparison jobs (histories needed): run in worker processes, cached as small pickles
 # ==========================================================================================
+@functools.lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """A short hash of what decides a run's physics: rockbench's source files (modules and
+    scenarios, except the report, command-line and testing layers) and the versions of the
+    installed engines. The campaign keeps its store under it, so that results computed by
+    other code are never mixed into a page."""
+    import rockbench
+    from ..engines import engine_info
+
+    root = Path(rockbench.__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*")):
+        rel = f.relative_to(root).as_posix()
+        if (not f.is_file() or f.suffix not in (".py", ".toml")
+                or rel.split("/")[0] in ("report", "testing") or rel in ("cli.py",
+                                                                       "__main__.py")):
+            continue
+        h.update(rel.encode())
+        h.update(f.read_bytes())
+    h.update(json.dumps(engine_info(), sort_keys=True, default=str).encode())
+    return h.hexdigest()[:12]
+
+
 def _job_key(job: Mapping[str, Any]) -> str:
     text = json.dumps(job, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -763,10 +789,12 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
             okk = s[s["status"] == "ok"]
             if len(okk) >= 2:
                 lo, hi = okk.iloc[0], okk.iloc[-1]
+                best = okk.loc[okk["nrmse"].astype(float).idxmin()]
                 lines.append(f"Time step ({b}): dt = {hi['dt']:g} s gives nrmse "
                              f"{hi['nrmse']:.3g} at a real-time factor of "
                              f"{hi['real_time_factor']:.3g}; dt = {lo['dt']:g} s gives "
-                             f"{lo['nrmse']:.3g} at {lo['real_time_factor']:.3g}.")
+                             f"{lo['nrmse']:.3g} at {lo['real_time_factor']:.3g}; the smallest "
+                             f"nrmse, {best['nrmse']:.3g}, at dt = {best['dt']:g} s.")
             for _, r in s[s["status"] == "error"].iterrows():
                 lines.append(f"{b} at dt = {r['dt']:g} s was not run: {r.get('reason') or ''}.")
             for _, r in s[~s["status"].isin(["ok", "error"])].iterrows():
@@ -857,9 +885,10 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     store_dir = Path(store) if store is not None else out / "store"
-    cache = store_dir / "comparisons"
+    fingerprint = code_fingerprint()
+    cache = store_dir / fingerprint / "comparisons"
     notes: list[str] = []
-    sweep_store = store_dir / "cases" if _have_pyarrow() else None
+    sweep_store = store_dir / fingerprint / "cases" if _have_pyarrow() else None
     if sweep_store is None:
         notes.append("pyarrow is not installed: the sweep cases (map, records) are not kept "
                      "between runs (pip install 'rockbench[parquet]').")
@@ -1091,7 +1120,11 @@ def _page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, en
             f"{plan['free_duration']:g} s: each engine's mean effective coefficient of "
             f"restitution relative to the analytic eta, 100 (eta_mean / eta_ref - 1) [%], "
             f"error bars one standard deviation over the impacts, per rocking direction after "
-            f"the impact.", name="eta_free_rocking", png_dir=figdir))
+            f"the impact. Free-standing frames: the engines measure eta from the energy of "
+            f"successive rocking peaks. Hybrid frames: from the angular velocities fitted just "
+            f"before and after each impact (docs/metrics.md), which the tendon and damper "
+            f"forces bend, so part of a hybrid frame's deviation may be the measurement's.",
+            name="eta_free_rocking", png_dir=figdir))
         etah.append(H.html_table(eta_summary, list(CAMPAIGN_COLUMNS["eta_summary.csv"]),
                                  units=units, grade_as={"rel_error": "eta_mean_rel_error"},
                                  scroll=True))
@@ -1176,7 +1209,8 @@ def _page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, en
                                  f"{list(plan['map_A'])}, W in {list(plan['map_W'])}"),
              ("time steps [s]", ", ".join(f"{d:g}" for d in plan["dt_sweep"])),
              ("records folder", str(records_dir) if records_dir else "none"),
-             ("quick", str(bool(quick))), ("store", str(store_dir))]
+             ("quick", str(bool(quick))), ("store", str(store_dir)),
+             ("code fingerprint", code_fingerprint())]
     default_settings = {}
     for p in payloads:
         for k, v in p.get("settings", {}).items():

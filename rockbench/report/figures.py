@@ -623,7 +623,8 @@ def plot_record_peaks(df: pd.DataFrame, *, title: str | None = None) -> Figure:
                 Line2D([], [], marker="o", linestyle="none", markerfacecolor="none",
                        color="0.3", label="polarity -1 (reversed)"),
                 Line2D([], [], marker="^", linestyle="none", color="0.3", label="overturned")]
-    axes[0].legend(handles=handles, fontsize=7, loc="upper right", ncol=2)
+    fig.legend(handles=handles, fontsize=7, loc="outside lower center",
+               ncol=len(handles))
     axes[-1].set_xticks(range(len(records)), records, rotation=60, fontsize=7, ha="right")
     axes[-1].set_xlabel("ground-motion record")
     if title:

@@ -247,10 +247,12 @@ def test_measure_impacts_energy_method_on_analytic_history(name):
                            uplift_tol=1e-3 * scene.alpha)
     imp = r.impacts()
     assert len(rows) == len(imp) >= 3
-    for row, (_, a) in zip(rows, imp.iterrows()):
+    for k, (row, (_, a)) in enumerate(zip(rows, imp.iterrows())):
         assert row["t"] == pytest.approx(a.t, abs=2e-5)   # 2 % of the sampling interval
         assert row["direction"] == a.direction
-        assert row["eta"] == pytest.approx(ref.eta[int(a.direction)], rel=2e-6)
+        # every peak sampled: energy method; the last one cut by the end of the record: fits
+        last = k == len(rows) - 1 and a.t > 6.0 - 0.5
+        assert row["eta"] == pytest.approx(ref.eta[int(a.direction)], rel=2e-3 if last else 2e-6)
 
 
 def test_excursions_refine_peaks_and_detect_rest():
@@ -345,7 +347,8 @@ def test_replayed_free_rocking_matches_analytic():
     assert imp.t.to_numpy() == pytest.approx(imp_ref.t.to_numpy(), abs=2e-5)
     assert imp.eta.to_numpy() == pytest.approx(imp_ref.eta.to_numpy(), rel=1e-6)
     s = r.summary
-    assert s.max_penetration < 1e-12 and s.max_sliding < 1e-12 and not s.contact_opened
+    tol = ContactProbe(scene, body_specs(scene)).tol
+    assert s.max_penetration < 1e-12 and s.max_sliding < tol ** 2 / 2 and not s.contact_opened
     assert s.uplifted and s.t_uplift == 0.0 and not (r.events.kind == "uplift").any()
     assert s.max_abs_phi == pytest.approx(0.5 * scene.alpha, rel=1e-12)
 

@@ -1,0 +1,184 @@
+"""Cross-engine consistency checks (issue 3): every registered engine, at its default settings,
+against the analytic backend on the cases of ``tests/engines/cases.py``.
+
+Bars (the same for every engine):
+
+* free rocking from 0.5 alpha (housner-block, paper-symmetric, paper-asymmetric): every impact's
+  effective eta within 0.5 % of the analytic eta of its direction, both directions present;
+  RMS of (phi - phi_analytic) / alpha over the first 2 s below 0.005;
+* the 16 surviving pulses (paper-asymmetric, paper-asymmetric-hybrid-eps1): max |phi| / alpha
+  within 3 % of the analytic one; the 16 overturning pulses: all overturn;
+* every run: status ok, penetration and sliding at most 2 mm;
+* the Result has the analytic backend's schema; phi is the left column's rotation (the first
+  sample equals phi0); two runs are identical; bad settings raise ParameterError.
+
+New engines join automatically once registered and importable. Each (engine, case) runs once
+per module (a module-scoped cache).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import cases
+import rockbench as rb
+from rockbench.analytic.kinematics import mechanism
+from rockbench.analytic.reference import Reference
+from rockbench.engines import available_backends, get_backend
+from rockbench.errors import ParameterError
+
+ENGINES = [n for n in available_backends() if n != "analytic"]
+
+pytestmark = pytest.mark.engines
+
+ETA_RTOL = 0.005
+NRMSE_MAX = 0.005
+PEAK_RTOL = 0.03
+CONTACT_MAX = 2e-3   # m
+
+ALL_CASES = cases.FREE_CASES + cases.SURVIVE_CASES + cases.OVERTURN_CASES
+
+
+@pytest.fixture(scope="module")
+def cache():
+    return {}
+
+
+def run(cache, engine: str, case):
+    """The Result of ``case`` on ``engine`` (default settings), computed once per module."""
+    key = (engine, case)
+    if key not in cache:
+        scene = case.load()
+        cache[key] = rb.run(scene, engine=engine, **case.kwargs(scene))
+    return cache[key]
+
+
+def ids(cs):
+    return [c.id for c in cs]
+
+
+# -----------------------------------------------------------------------------------------
+@pytest.mark.parametrize("case", cases.FREE_CASES, ids=ids(cases.FREE_CASES))
+@pytest.mark.parametrize("engine", ENGINES)
+def test_free_rocking_eta(cache, engine, case):
+    r = run(cache, engine, case)
+    assert r.ok, r.summary.reason
+    eta = Reference(r.scene).eta
+    imp = r.impacts()
+    assert set(imp.direction) == {1, -1}, f"impacts {list(imp.direction)}"
+    for _, e in imp.iterrows():
+        d = int(e.direction)
+        err = e.eta / eta[d] - 1
+        assert abs(err) <= ETA_RTOL, (f"impact at t = {e.t:.3f} s into direction {d:+d}: "
+                                      f"eta = {e.eta:.5f}, analytic {eta[d]:.5f} "
+                                      f"({100 * err:+.2f} %)")
+
+
+@pytest.mark.parametrize("case", cases.FREE_CASES, ids=ids(cases.FREE_CASES))
+@pytest.mark.parametrize("engine", ENGINES)
+def test_free_rocking_history(cache, engine, case):
+    r, ref = run(cache, engine, case), run(cache, "analytic", case)
+    t, tr = r.history.t.to_numpy(), ref.history.t.to_numpy()
+    assert np.array_equal(t, tr), "engine and analytic histories are not on the same grid"
+    m = t - t[0] <= cases.NRMSE_WINDOW + 1e-9
+    d = (r.history.phi.to_numpy() - ref.history.phi.to_numpy())[m] / r.scene.alpha
+    nrmse = float(np.sqrt(np.mean(d * d)))
+    assert nrmse < NRMSE_MAX, f"RMS (phi - phi_analytic) / alpha over 2 s = {nrmse:.2e}"
+
+
+@pytest.mark.parametrize("case", cases.SURVIVE_CASES, ids=ids(cases.SURVIVE_CASES))
+@pytest.mark.parametrize("engine", ENGINES)
+def test_surviving_pulse_peak(cache, engine, case):
+    ref = run(cache, "analytic", case)
+    peak_ref = ref.summary.max_abs_phi_over_alpha
+    assert not ref.summary.overturned and 0.3 <= peak_ref <= 0.8, "not a survive case"
+    r = run(cache, engine, case)
+    assert r.ok, r.summary.reason
+    assert not r.summary.overturned
+    err = r.summary.max_abs_phi_over_alpha / peak_ref - 1
+    assert abs(err) <= PEAK_RTOL, (f"max |phi| / alpha = {r.summary.max_abs_phi_over_alpha:.4f}"
+                                   f", analytic {peak_ref:.4f} ({100 * err:+.2f} %)")
+
+
+@pytest.mark.parametrize("case", cases.OVERTURN_CASES, ids=ids(cases.OVERTURN_CASES))
+@pytest.mark.parametrize("engine", ENGINES)
+def test_overturning_pulse(cache, engine, case):
+    assert run(cache, "analytic", case).summary.overturned, "not an overturn case"
+    r = run(cache, engine, case)
+    assert r.ok, r.summary.reason
+    assert r.summary.overturned, (f"survived with max |phi| / alpha = "
+                                  f"{r.summary.max_abs_phi_over_alpha:.3f}")
+
+
+@pytest.mark.parametrize("case", ALL_CASES, ids=ids(ALL_CASES))
+@pytest.mark.parametrize("engine", ENGINES)
+def test_contacts_hold(cache, engine, case):
+    s = run(cache, engine, case).summary
+    assert s.max_penetration <= CONTACT_MAX, f"penetration {1e3 * s.max_penetration:.2f} mm"
+    assert s.max_sliding <= CONTACT_MAX, f"sliding {1e3 * s.max_sliding:.2f} mm"
+
+
+# -----------------------------------------------------------------------------------------
+@pytest.mark.parametrize("engine", ENGINES)
+def test_runs_are_repeatable(cache, engine):
+    case = cases.SURVIVE_CASES[-1]            # hybrid frame: devices and a pulse
+    a = run(cache, engine, case)
+    scene = case.load()
+    b = rb.run(scene, engine=engine, **case.kwargs(scene))
+    for c in a.history.columns:
+        assert np.array_equal(a.history[c].to_numpy(), b.history[c].to_numpy(),
+                              equal_nan=a.history[c].dtype.kind == "f"), c
+    assert a.events.equals(b.events)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_result_schema_is_the_analytic_one(cache, engine):
+    for case in (cases.FREE_CASES[0], cases.SURVIVE_CASES[-1]):
+        r, ref = run(cache, engine, case), run(cache, "analytic", case)
+        assert list(r.history.columns) == list(ref.history.columns)
+        assert list(r.history.dtypes) == list(ref.history.dtypes)
+        assert list(r.events.columns) == list(ref.events.columns)
+        assert list(r.events.dtypes) == list(ref.events.dtypes)
+        assert r.backend == engine and r.motion == ref.motion
+        assert r.cost.steps > 0 and 0 < r.cost.real_time_factor < math.inf
+        assert r.cost.sim_time == pytest.approx(ref.cost.sim_time)
+        js = r.to_json()
+        assert js["eta_measured"] == r.summary.eta_measured
+        assert js["real_time_factor"] > 0
+        assert not r.history.penetration.isna().any()
+        np.testing.assert_array_equal(r.history.ground_acc.to_numpy(),
+                                      ref.history.ground_acc.to_numpy())
+
+
+@pytest.mark.parametrize("name", ["housner-block", "paper-asymmetric",
+                                  "paper-asymmetric-hybrid"])
+@pytest.mark.parametrize("engine", ENGINES)
+def test_phi_is_the_left_column_rotation(engine, name):
+    scene = rb.load_scene(name)
+    for phi0 in (0.3 * scene.alpha, -0.2 * scene.alpha):
+        r = rb.run(scene, engine=engine, duration=0.005, phi0=phi0)
+        h = r.history
+        assert h.phi.iloc[0] == pytest.approx(phi0, rel=1e-9)
+        assert h.phidot.iloc[0] == 0.0
+        if scene.is_frame:
+            cfg = mechanism(scene.structure, 1 if phi0 > 0 else -1).configuration(phi0)
+            assert h.theta_beam.iloc[0] == pytest.approx(cfg.bodies[1].theta, abs=1e-12)
+            assert h.theta_right.iloc[0] == pytest.approx(cfg.bodies[2].theta, abs=1e-12)
+        # it falls back towards rest, the way the analytic model does
+        assert abs(h.phi.iloc[-1]) < abs(phi0)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_bad_settings_raise(engine):
+    scene = rb.load_scene("housner-block")
+    Settings = get_backend(engine).Settings
+    bad = [dict(dt=-1e-3), dict(dt=0.5), dict(output_dt=1e-5), dict(friction=0.0),
+           dict(max_penetration=-1.0), dict(not_a_setting=1)]
+    for kw in bad:
+        with pytest.raises(ParameterError):
+            rb.run(scene, engine=engine, duration=0.01, phi0=0.05, **kw)
+    with pytest.raises(ParameterError):
+        Settings(dt=float("nan"))
