@@ -20,7 +20,7 @@ Usage::
 
     python benchmarks/pymunk_settings.py                          # pymunk at its defaults
     python benchmarks/pymunk_settings.py "dt=5e-4" "iterations=10"  # one row per setting
-    python benchmarks/pymunk_settings.py --sweep                   # the sweep of docs/engines/pymunk.md
+    python benchmarks/pymunk_settings.py --sweep         # the sweep of docs/engines/pymunk.md
     python benchmarks/pymunk_settings.py --engine mujoco ""        # another engine
     python benchmarks/pymunk_settings.py --cases "dt=2e-3"         # every case's numbers
     python benchmarks/pymunk_settings.py --speed "" "dt=5e-4"       # real-time factors

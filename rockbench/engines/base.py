@@ -43,8 +43,8 @@ Engines that step a rigid-body world should subclass :class:`EngineBackend`, whi
 and optionally ``_remove_devices(self)`` (native devices: switch them off at fracture) and
 ``_native_device_report(self, devices, state, elongations)`` (native devices: the tendon
 tensions and damper forces [N] the engine applies, for the history). A ``damper`` field in the
-adapter's Settings, if present, selects how shared damper forces reach the bodies (one of
-:data:`DAMPER_MODELS`, see :class:`DeviceGeometry`; default "couple").
+adapter's Settings, if present and one of :data:`DAMPER_MODELS`, selects how the shared damper
+forces reach the bodies (see :class:`DeviceGeometry`; otherwise "couple").
 
 Counters and attributes the base class keeps: ``steps`` (engine steps), ``wall_s`` (seconds
 spent in ``_step``, building and the Python loop excluded), ``specs``, ``foundation``,
@@ -95,7 +95,8 @@ from ..scene.scene import Scene
 from ..scene.structure import Block, Frame
 
 __all__ = ["Backend", "EngineBackend", "EngineSettings", "BodySpec", "FoundationSpec",
-           "PointForce", "DeviceGeometry", "ContactProbe", "Excursion", "body_specs",
+           "PointForce", "DeviceGeometry", "DAMPER_MODELS", "ContactProbe", "Excursion",
+           "body_specs",
            "foundation_spec", "initial_poses", "device_forces", "net_wrenches",
            "contact_diagnostics", "excursions", "measure_impacts", "output_grid", "run_window"]
 
@@ -252,13 +253,6 @@ def _world(pose, lx: float, ly: float) -> tuple[float, float]:
     return x + c * lx - s * ly, y + s * lx + c * ly
 
 
-def _world_vel(state, lx: float, ly: float) -> tuple[float, float]:
-    x, y, th, vx, vy, w = state
-    c, s = math.cos(th), math.sin(th)
-    rx, ry = c * lx - s * ly, s * lx + c * ly
-    return vx - w * ry, vy + w * rx
-
-
 #: How the dampers' force reaches the bodies (see :class:`DeviceGeometry`).
 DAMPER_MODELS = ("couple", "heel", "distributed")
 
@@ -297,10 +291,10 @@ class DeviceGeometry:
     heel they lift the column off its pivot in the closing half-cycle; as a couple they spin a
     column as soon as a contact opens for one step, which Chipmunk's first-order position update
     does every so often (the beam resting on a rotating column drifts off it by a dt^2 term).
-    Measured in pymunk on the hybrid cases of ``tests/engines/cases.py``: heel, up to 1 m of
-    slip and 13 of 32 runs diverged; couple, 4 cm of slip and peaks 3.8 % off; distributed,
-    0.8 mm and 0.3 %. Engines whose contacts stay closed (soft, penetrating contacts) may use
-    the couple.
+    Measured in pymunk on the cases of ``tests/engines/cases.py`` (docs/engines/pymunk.md):
+    heel, up to 1 m of slip, 11 of 35 runs diverged; couple, 3.7 cm of slip and peaks 4.8 %
+    off; distributed, 0.8 mm and 0.3 %. Engines whose contacts stay closed (soft, penetrating
+    contacts) may use the couple.
     """
 
     def __init__(self, scene: Scene, specs: list[BodySpec], damper: str = "couple"):
@@ -342,7 +336,8 @@ class DeviceGeometry:
         (C dc/dt, + resisting opening), for the bodies' ``state`` (n_bodies, 6)."""
         state = state.tolist() if isinstance(state, np.ndarray) else state
         out: list[PointForce] = []
-        tensions, dampers = [], []
+        tensions, dampers, elong = [], [], []
+        self.last_elongations = elong       # [m], for the caller's fracture check
         power = 0.0                         # damper power C sum (dc/dt)^2 [W]
         for idx, F, p_loc, q_loc, t_loc, corners in self.columns:
             st = state[idx]
@@ -352,6 +347,7 @@ class DeviceGeometry:
             dbx, dby = F[0] - P[0], F[1] - P[1]
             dtx, dty = T[0] - Q[0], T[1] - Q[1]
             db, dt_ = math.hypot(dbx, dby), math.hypot(dtx, dty)
+            elong.append(db + dt_)
             tension = self.k * (db + dt_)
             tensions.append(tension)
             if tension > 0.0:
@@ -788,7 +784,9 @@ class EngineBackend(Backend):
         alpha = scene.alpha
         fall = scene.fall_angles
         acc = motion.acceleration if motion is not None else None
-        devices = (DeviceGeometry(scene, self.specs, getattr(cfg, "damper", "couple"))
+        damper = getattr(cfg, "damper", "couple")
+        devices = (DeviceGeometry(scene, self.specs,
+                                  damper if damper in DAMPER_MODELS else "couple")
                    if scene.has_devices else None)
         intact = devices is not None
         check_strain = devices is not None and devices.eps_f is not None
@@ -811,8 +809,6 @@ class EngineBackend(Backend):
         checked = 0                        # samples already probed for penetration / sliding
         energy0 = None
         free = motion is None and devices is None
-        tensions = [0.0, 0.0]
-        damp_f = [0.0, 0.0]
         prev_t, prev = None, None
         try:
             self._build()
@@ -856,19 +852,20 @@ class EngineBackend(Backend):
                     break
                 forces: list[PointForce] = []
                 if intact:
-                    el = devices.elongations(state) if (check_strain or self.native_devices) \
-                        else None
+                    if self.native_devices:
+                        el = devices.elongations(state) if check_strain else None
+                    else:                      # the forces, and the elongations with them
+                        forces = devices.forces(state)[0]
+                        el = devices.last_elongations
                     if check_strain and max(el) / devices.l >= devices.eps_f:
+                        forces = []
                         intact = False
                         fractured, t_frac = True, t
                         ev.append(dict(t=t, kind="fracture", phi=phi,
                                        phidot_before=state[0, 5], phidot_after=state[0, 5],
                                        direction=1 if phi > 0 else -1))
-                        tensions, damp_f = [0.0, 0.0], [0.0, 0.0]
                         if self.native_devices:
                             self._remove_devices()
-                    elif not self.native_devices:
-                        forces = devices.forces(state)[0]
                 g_x = -float(acc(t + 0.5 * dt)) if acc is not None else 0.0
                 ts = time.perf_counter()
                 self._step(g_x, forces)

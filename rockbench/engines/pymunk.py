@@ -1,9 +1,16 @@
 """pymunk (Chipmunk 2-D) backend: the planar engine.
 
-Each body of the scene is one ``pymunk.Body`` with its true mass and moment of inertia and one
-box ``Poly``; the foundation (ground segment and step box) is static. Device forces come from
-the shared machinery (:class:`rockbench.engines.base.DeviceGeometry`), applied at points every
-step.
+Each body of the scene is one ``pymunk.Body`` with its true mass and moment of inertia (the
+beam's m rho^2 of the scene, not its box's) and one box ``Poly``; the foundation (a ground
+segment and, for the asymmetric frame, the step box) is static. Every shape gets friction
+sqrt(mu) (pymunk multiplies a pair's coefficients) and no elasticity. Ground motion is the
+shared time-varying gravity. Tendons and dampers are the shared
+:class:`rockbench.engines.base.DeviceGeometry` forces (tendon elongation = base opening + top
+opening, exactly), summed into one force and one torque per body before every step; pymunk's
+own ``DampedSpring`` is not used (a straight spring from the foundation to the beam would be up
+to 0.4 % shorter over the rocking range, see ``tests/engines/test_pymunk.py``).
+
+Settings, defaults and the measurements behind them: ``docs/engines/pymunk.md``.
 """
 
 from __future__ import annotations
@@ -33,13 +40,16 @@ class PymunkSettings(EngineSettings):
     iterations : solver iterations per step (default 30; pymunk's 10 leaves the three-body
         frame's impacts unconverged: eta off by 0.9 %, 18 mm of slip).
     collision_slop : overlap [m] left uncorrected (default 3e-4 m; pymunk's 0.1 is meant for
-        pixels; 0 puts the asymmetric frame's eta 0.8 % off).
+        pixels; 0 puts the asymmetric frame's eta 0.8 % off, 1e-4 lets a frame slip 1.3 mm).
     collision_bias : fraction of the overlap beyond the slop left after 1 s (pymunk's default
-        (1 - 0.1)^60; 0.1^60 lets the hybrid frame slide 2 mm).
+        (1 - 0.1)^60; the results hardly depend on it).
     damper : how the dampers' force reaches the bodies, one of
         :data:`~rockbench.engines.base.DAMPER_MODELS` (default "distributed": the damper power
         taken from each body in proportion to its momentum; "couple" and "heel" make the
         hybrid frame slide by 4 cm to 1 m, see :class:`~rockbench.engines.base.DeviceGeometry`).
+
+    Inherited (:class:`~rockbench.engines.base.EngineSettings`): output_dt, uplift_tol,
+    max_penetration, max_sliding, energy_gain_tol.
     """
 
     dt: float = 1e-3

@@ -46,7 +46,6 @@ from . import figures as F
 from . import html as H
 
 __all__ = [
-    "code_fingerprint",
     "CAMPAIGN_COLUMNS",
     "DT_SWEEP",
     "FREE_PHI0_OVER_ALPHA",
@@ -57,6 +56,7 @@ __all__ = [
     "RECORD_FRAMES",
     "SCENES",
     "campaign_plan",
+    "code_fingerprint",
     "find_records",
     "run_campaign",
 ]
@@ -256,6 +256,7 @@ def code_fingerprint() -> str:
     installed engines. The campaign keeps its store under it, so that results computed by
     other code are never mixed into a page."""
     import rockbench
+
     from ..engines import engine_info
 
     root = Path(rockbench.__file__).resolve().parent
@@ -774,7 +775,12 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
         if not len(bad):
             lines.append("No pulse or free-rocking run diverged.")
         flags = pulses[pulses["status"] == "ok"]
-        for b in order:
+        if len(flags) and not flags["energy_gained_at_impact"].fillna(False).astype(bool).any():
+            lines.append("No engine gained energy at an impact in any pulse case.")
+            order_flags: list[str] = []
+        else:
+            order_flags = order
+        for b in order_flags:
             parts = []
             for label, g in _groups(flags[flags["backend"] == b]):
                 n = int(g["energy_gained_at_impact"].fillna(False).astype(bool).sum())

@@ -12,18 +12,22 @@ Every engine is held to the same bars on these runs (``tests/engines/test_cross_
   response (d ln(peak) / d ln(A) between 0.8 and 3, measured) and, for the hybrid frame, stay below
   the fracture rotation (0.485 alpha ccw, 0.476 alpha cw): beyond it the frame overturns.
 * ``OVERTURN_CASES``: per frame scene, two W and the four pulses (8 runs), at
-  A = ``OVERTURN_FACTOR`` x the analytic overturning threshold of that pulse (the smallest A that
-  overturns, by bisection, stored in ``OVERTURN_THRESHOLDS``). The analytic frame overturns at
-  every A from 1.1 to 1.3 x the threshold for all of them (checked when they were chosen: some
-  pulses have survival islands above the threshold, e.g. paper-asymmetric at W = 2, symmetric +1,
-  survives at 1.2 and 1.25 x; such W were not used).
+  A = ``OVERTURN_FACTOR`` (1.2) x the analytic overturning threshold of that pulse (the smallest
+  A that overturns, by bisection, stored in ``OVERTURN_THRESHOLDS``), with the scene's fall
+  angle set to ``OVERTURN_FALL`` = 4 alpha. The analytic frame overturns at every A from 1.1 to
+  1.3 x the threshold for all of them (checked when they were chosen: some pulses have survival
+  islands above the threshold, e.g. paper-asymmetric at W = 2, symmetric +1, survives at 1.2 and
+  1.25 x; such W were not used), at t = 1.5 to 4.8 s after the pulse centre at 1.2 x.
 
 Runs are short to keep the suite fast: a pulse run starts at the pulse's ``t_start`` (-3 T_g) and
 ends ``end`` seconds after the pulse centre (t = 0). The largest |phi| of every survive run occurs
-before t = 1.9 s; every overturn run overturns before its end.
+before t = 1.9 s; every overturn run overturns before its end. Analytic peaks of the survive
+cases (max |phi| / alpha): paper-asymmetric (6.5, 6) 0.520 / 0.494 / 0.487 / 0.483, (5, 5)
+0.629 / 0.598 / 0.444 / 0.456; hybrid eps1 (7, 3) 0.348 / 0.339 / 0.385 / 0.377, (10, 4)
+0.352 / 0.344 / 0.420 / 0.413 (pulses in the order of ``PULSES``).
 
-Run ``python tests/engines/cases.py`` to recompute the thresholds and the analytic peaks (about
-a minute).
+Run ``python tests/engines/cases.py`` to recompute the thresholds and the analytic peaks (a
+minute or two).
 """
 
 from __future__ import annotations
