@@ -596,7 +596,8 @@ def excursions(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, uplift_tol
 
 def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha: float,
                     free: bool, energy=None, inertia0=None, uplift_tol: float,
-                    guard: float = 0.01, window: float = 0.05,
+                    guard: float = 0.01, window: float = 0.05, guard_rate: float = 0.004,
+                    rate_window: float = 0.02,
                     rest_rate: float = 0.0) -> list[dict[str, Any]]:
     """Impacts (zero crossings of phi between uplifted excursions, see :func:`excursions`)
     with the effective coefficient of restitution measured from the sampled motion.
@@ -617,9 +618,10 @@ def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha
       samples around the largest |phi|.
     * otherwise (ground motion, devices, or a peak not reached before the record ends): phi'
       just before and after the crossing, each extrapolated to the crossing time by a quadratic
-      fit of phi(t) on a ``window`` [s] that ends ``guard`` [s] before (starts ``guard`` after)
-      it, clipped to the excursion so that a fit never spans another impact; NaN if fewer than
-      five samples remain.
+      fit of the sampled phidot on a ``rate_window`` [s] that ends ``guard_rate`` [s] before
+      (starts ``guard_rate`` after) it, clipped to the excursion so that a fit never spans
+      another impact; NaN if fewer than three samples remain. (A fit of phi's slope on a longer
+      window, used for the crossing time, was biased by up to 1.7 % under strong pulses.)
 
     The crossing time is the zero of the fitted arc before the impact (the rigid-contact impact
     time, which a soft contact blurs), or the linear interpolation between the two samples
@@ -649,8 +651,14 @@ def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha
             tc += x
             cb = _shift(cb, x)
             ca = _shift(ca, x) if ca is not None else None
-        vb = float(cb[1]) if cb is not None else math.nan
-        va = float(ca[1]) if ca is not None else math.nan
+        # angular velocities just before / after: quadratic fits of the sampled phidot on
+        # short windows (``rate_window`` [s]) outside the contact (``guard`` [s]) - the fit of
+        # phi's slope above is biased under a strong pulse (measured on the exact analytic
+        # history: up to 1.7 % against 0.07 % for these fits)
+        vb = _fit_value(t, phidot, max(t[a.i0], tc - guard_rate - rate_window),
+                        tc - guard_rate, tc)
+        va = _fit_value(t, phidot, tc + guard_rate,
+                        min(t[b.i1], tc + guard_rate + rate_window), tc)
         e = math.nan
         if free and energy is not None and a.complete and b.complete:
             Vb, Va = energy(a.sign * a.peak), energy(b.sign * b.peak)
@@ -661,6 +669,15 @@ def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha
         rows.append(dict(t=float(tc), kind="impact", phi=0.0, phidot_before=vb,
                          phidot_after=va, eta=e, direction=b.sign))
     return rows
+
+
+def _fit_value(t, y, ta, tb, tc) -> float:
+    """Value at ``tc`` of a least-squares quadratic through the samples ta <= t <= tb (at least
+    three), NaN otherwise."""
+    m = (t >= ta) & (t <= tb)
+    if m.sum() < 3:
+        return math.nan
+    return float(np.polyfit(t[m] - tc, np.asarray(y, dtype=float)[m], 2)[-1])
 
 
 def _fit(t, phi, ta, tb, tc):
