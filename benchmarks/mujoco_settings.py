@@ -28,7 +28,6 @@ import argparse
 import functools
 import importlib.util
 import math
-import sys
 import time
 from pathlib import Path
 

@@ -351,7 +351,7 @@ class MujocoBackend(EngineBackend):
                 rate = 2.0 * b * math.cos(0.5 * q[dof]) * v[dof]
                 power += self._c * rate * rate
             ke2 = float(np.dot(self._massvec, v * v))         # 2 x kinetic energy [J]
-            # [1/s]; bounded by C (2b)^2 / I_column since ke2 >= I_column omega_j^2
+            # [1/s]; <= C (2b)^2 / min I_column since ke2 >= sum_j I_column_j omega_j^2
             m.dof_damping[:] = (power / ke2 if ke2 > 0.0 else 0.0) * self._massvec
             return
         for dof, b, heel in self._damped:
