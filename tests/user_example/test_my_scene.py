@@ -9,4 +9,4 @@ pulse = rb.RickerPulse.dimensionless(A=2.0, W=3.0, structure=scene.structure)
 def test_engine_agrees_with_theory(rockbench_backend, rockbench_reference):
     reference = rockbench_reference(scene, pulse, duration=5.0)
     result = rb.run(scene, pulse, engine=rockbench_backend, duration=5.0)
-    assert_agree(result, reference)
+    assert_agree(result, reference, eta_rtol=0.01)  # forced rocking: 1 %
