@@ -12,7 +12,7 @@ $(PY):
 	$(PY) -m pip install --quiet --upgrade pip
 
 $(STAMP): $(PY) pyproject.toml
-	$(PY) -m pip install --quiet -e '.[engines,test,parquet]'
+	$(PY) -m pip install --quiet -e '.[engines,test,parquet,dask]'
 	@touch $(STAMP)
 
 install: $(STAMP)

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import inspect
 import json
 import math
 import os
@@ -692,6 +691,30 @@ def _pandas_display():
     return pd.option_context("display.width", 200, "display.max_columns", 50)
 
 
+def _print_constants(out: str | Path) -> None:
+    """Print the analytic constants of the campaign's scenes and write them to
+    ``out/constants.csv`` (the table ``rockbench info`` gives for one scene)."""
+    import pandas as pd
+
+    from . import info
+    from .report.campaign import SCENES
+    from .scene import load_scene
+
+    cols = {"scene": "", "alpha": "rad", "p": "rad/s", "lambda_ccw": "g", "lambda_cw": "g",
+            "eta_ccw": "-", "eta_cw": "-", "phi_cr_ccw": "rad", "phi_cr_cw": "rad",
+            "phi_fall_ccw": "rad", "phi_fall_cw": "rad", "phi_fracture_ccw": "rad",
+            "phi_fracture_cw": "rad"}
+    rows = [info(load_scene(name)) for name in SCENES]
+    table = pd.DataFrame(rows).reindex(columns=list(cols))
+    print("Analytic constants of the campaign's scenes (critical angle: none = no zero of "
+          "dV/dphi before the fall angle; fracture: none = no fracture):")
+    shown = table.rename(columns={c: f"{c} [{u}]" if u else c for c, u in cols.items()})
+    with _pandas_display():
+        print(shown.to_string(index=False, na_rep="none", float_format=lambda v: f"{v:.5g}"))
+    Path(out).mkdir(parents=True, exist_ok=True)
+    table.to_csv(Path(out) / "constants.csv", index=False)
+
+
 def cmd_report(args: argparse.Namespace) -> int:
     try:
         from .report import run_campaign
@@ -710,12 +733,8 @@ def cmd_report(args: argparse.Namespace) -> int:
     if args.dask is not None:
         kwargs.update(executor="dask", dask_address=args.dask)
     if args.workers is not None:
-        params = inspect.signature(run_campaign).parameters
-        if "workers" not in params and not any(
-                q.kind is inspect.Parameter.VAR_KEYWORD for q in params.values()):
-            raise ParameterError("--workers", args.workers,
-                                 "omitted (this version of run_campaign has no workers option)")
         kwargs["workers"] = args.workers
+    _print_constants(args.out)
     path = run_campaign(args.out, **kwargs)
     print(f"report: {path}")
     return 0

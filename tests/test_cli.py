@@ -353,7 +353,13 @@ def test_report_passes_options_to_run_campaign(tmp_path, capsys, monkeypatch):
     assert main(["report", "--out", str(tmp_path), "--quick", "--engines", "pymunk",
                  "--dask", "tcp://127.0.0.1:8786", "--store", str(tmp_path / "s.parquet"),
                  "--records", str(tmp_path), "--workers", "3"]) == 0
-    assert capsys.readouterr().out.strip() == f"report: {tmp_path / 'index.html'}"
+    out = capsys.readouterr().out.strip().splitlines()
+    assert out[-1] == f"report: {tmp_path / 'index.html'}"
+    # the constants table of the campaign's scenes is printed first and saved beside the page
+    assert out[0].startswith("Analytic constants") and "paper-asymmetric-hybrid-eps1" in "".join(out)
+    constants = pd.read_csv(tmp_path / "constants.csv")
+    sym = constants.set_index("scene").loc["paper-symmetric"]
+    assert sym["eta_ccw"] == pytest.approx(0.960625) and sym["lambda_ccw"] == pytest.approx(1 / 7)
     assert seen["out_dir"] == str(tmp_path) and seen["quick"] is True
     assert seen["engines"] == ["pymunk"] and seen["records_dir"] == str(tmp_path)
     assert seen["executor"] == "dask" and seen["dask_address"] == "tcp://127.0.0.1:8786"
