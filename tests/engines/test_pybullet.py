@@ -207,6 +207,31 @@ def test_free_flight_has_no_hidden_damping_or_motors(block):
     b._close()
 
 
+def test_world_frame_point_forces_give_the_wrench_about_the_centre_of_mass(block):
+    """In flight (no contact), forces at world points give exactly the linear acceleration
+    sum F / m and the angular acceleration sum (r x F) / I about the centre of mass: a pure
+    couple, and an off-centre oblique force on a body turned by 0.3 rad."""
+    cases = [
+        lambda x, y: [PointForce(0, x, y + 1.0, -1e5, 0.0), PointForce(0, x, y - 1.0, 1e5, 0.0)],
+        lambda x, y: [PointForce(0, x + 0.3, y + 2.0, 2e5, -1e5)],
+    ]
+    for make in cases:
+        b = _built(block)
+        bid, sp, dt = b._bodies[0], b.specs[0], b.settings.dt
+        pb.resetJointState(bid, 1, targetValue=20.0, targetVelocity=0.0, physicsClientId=b._cid)
+        pb.resetJointState(bid, 2, targetValue=0.3, targetVelocity=0.0, physicsClientId=b._cid)
+        s0 = b._state()[0]
+        fs = make(s0[0], s0[1])
+        b._step(0.0, fs)
+        s1 = b._state()[0]
+        fx, fy = sum(f.fx for f in fs), sum(f.fy for f in fs)
+        m = sum((f.px - s0[0]) * f.fy - (f.py - s0[1]) * f.fx for f in fs)
+        assert (s1[3] - s0[3]) / dt == pytest.approx(fx / sp.mass, rel=1e-5, abs=1e-9)
+        assert (s1[4] - s0[4]) / dt == pytest.approx(fy / sp.mass - G, rel=1e-5)
+        assert (s1[5] - s0[5]) / dt == pytest.approx(m / sp.inertia, rel=1e-9)
+        b._close()
+
+
 def test_point_force_moment_about_the_pivot(block):
     """A horizontal force F at the top centre of the block (world frame) tips it clockwise about
     the bottom-right corner with angular acceleration (2 H F - m g b) / I_O."""
