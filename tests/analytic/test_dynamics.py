@@ -17,12 +17,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rockbench.analytic.dynamics import Dynamics
-from rockbench.analytic.kinematics import geometric_limit, mechanism
+from rockbench.analytic.kinematics import geometric_limit
 from rockbench.analytic.reference import Reference
 from rockbench.constants import G
 from rockbench.scene.devices import Devices
 from rockbench.scene.scene import Scene, load_scene
 from rockbench.scene.structure import Block, Frame
+from strategies import frames
 
 FAST = settings(max_examples=30, deadline=None)
 
@@ -99,17 +100,6 @@ def trajectory(direction: int, lim: float):
             lambda t: a * 0.8 * 1.3 * math.cos(1.3 * t))
 
 
-frames = st.builds(
-    lambda w, hl, ratio, gap, over, bh, rho, mr: Frame(
-        column_width=w, column_height_left=hl, column_height_right=ratio * hl,
-        span=w + gap, beam_width=w + gap + w + over, beam_height=bh,
-        beam_gyration_radius=rho, mass_ratio=mr),
-    w=st.floats(0.2, 2.0), hl=st.floats(2.0, 12.0), ratio=st.floats(0.4, 1.0),
-    gap=st.floats(0.5, 14.0), over=st.floats(0.0, 4.0), bh=st.floats(0.3, 3.0),
-    rho=st.floats(0.3, 6.0), mr=st.floats(0.05, 20.0)).filter(
-    # the three-block mechanism must hold (a column keeps rotating the rocking way relative to
-    # the beam) at least up to |phi| = alpha; rockbench.Scene refuses other frames
-    lambda f: min(geometric_limit(mechanism(f, s)) for s in (1, -1)) >= f.alpha)
 devices = st.builds(Devices, tendon_stiffness=st.floats(1e5, 1e8),
                     tendon_length=st.floats(1.0, 20.0), damping=st.floats(1e4, 1e8))
 

@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from rockbench.analytic.kinematics import FrameMechanism, geometric_limit, mechanism
 from rockbench.scene.scene import load_scene
 from rockbench.scene.structure import Block, Frame
+from strategies import frames
 
 FAST = settings(max_examples=40, deadline=None)
 
@@ -51,17 +52,6 @@ def dist(p, q) -> float:
     return math.hypot(p[0] - q[0], p[1] - q[1])
 
 
-frames = st.builds(
-    lambda w, hl, ratio, gap, over, bh, rho, mr: Frame(
-        column_width=w, column_height_left=hl, column_height_right=ratio * hl,
-        span=w + gap, beam_width=w + gap + w + over, beam_height=bh,
-        beam_gyration_radius=rho, mass_ratio=mr),
-    w=st.floats(0.2, 2.0), hl=st.floats(2.0, 12.0), ratio=st.floats(0.4, 1.0),
-    gap=st.floats(0.5, 14.0), over=st.floats(0.0, 4.0), bh=st.floats(0.3, 3.0),
-    rho=st.floats(0.3, 6.0), mr=st.floats(0.05, 20.0)).filter(
-    # the three-block mechanism must hold (a column keeps rotating the rocking way relative to
-    # the beam) at least up to |phi| = alpha; rockbench.Scene refuses other frames
-    lambda f: min(geometric_limit(mechanism(f, s)) for s in (1, -1)) >= f.alpha)
 blocks = st.builds(Block, width=st.floats(0.1, 3.0), height=st.floats(0.5, 12.0))
 
 
