@@ -1,4 +1,6 @@
-"""Hypothesis strategies shared by the analytic tests."""
+"""Hypothesis strategies and geometry helpers shared by the analytic tests."""
+
+import math
 
 from hypothesis import strategies as st
 
@@ -17,3 +19,14 @@ frames = st.builds(
     gap=st.floats(0.5, 14.0), over=st.floats(0.0, 4.0), bh=st.floats(0.3, 3.0),
     rho=st.floats(0.3, 6.0), mr=st.floats(0.05, 20.0)).filter(
     lambda f: min(geometric_limit(mechanism(f, s)) for s in (1, -1)) >= f.alpha)
+
+
+def material_point(body, rest_body, point) -> tuple[float, float]:
+    """Current position [m] of the material point of ``body`` that is at ``point`` at rest."""
+    rx, ry = point[0] - rest_body.x, point[1] - rest_body.y
+    c, s = math.cos(body.theta), math.sin(body.theta)
+    return body.x + c * rx - s * ry, body.y + s * rx + c * ry
+
+
+def dist(p, q) -> float:
+    return math.hypot(p[0] - q[0], p[1] - q[1])

@@ -23,7 +23,7 @@ from rockbench.constants import G
 from rockbench.scene.devices import Devices
 from rockbench.scene.scene import Scene, load_scene
 from rockbench.scene.structure import Block, Frame
-from strategies import frames
+from strategies import dist, frames, material_point
 
 FAST = settings(max_examples=30, deadline=None)
 
@@ -55,16 +55,6 @@ def masses(structure) -> list[tuple[float, float]]:
             (mb, mb * f.beam_gyration_radius**2),
             (mr, mr * (f.column_width**2 + f.column_height_right**2) / 12.0)]
 
-
-def material_point(body, rest_body, point) -> tuple[float, float]:
-    """Current position [m] of the material point of ``body`` that is at ``point`` at rest."""
-    rx, ry = point[0] - rest_body.x, point[1] - rest_body.y
-    c, s = math.cos(body.theta), math.sin(body.theta)
-    return body.x + c * rx - s * ry, body.y + s * rx + c * ry
-
-
-def dist(p, q) -> float:
-    return math.hypot(p[0] - q[0], p[1] - q[1])
 
 
 def tendon_elongations(dyn: Dynamics, phi: float) -> tuple[float, float]:

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from rockbench.analytic.kinematics import FrameMechanism, geometric_limit, mechanism
 from rockbench.scene.scene import load_scene
 from rockbench.scene.structure import Block, Frame
-from strategies import frames
+from strategies import dist, frames, material_point
 
 FAST = settings(max_examples=40, deadline=None)
 
@@ -40,16 +40,6 @@ def d2(f, x: float, h: float) -> float:
     c = lambda hh: (f(x + hh) - 2.0 * f(x) + f(x - hh)) / (hh * hh)
     return (4.0 * c(0.5 * h) - c(h)) / 3.0
 
-
-def material_point(body, rest_body, point) -> tuple[float, float]:
-    """Current position [m] of the material point of ``body`` that is at ``point`` at rest."""
-    rx, ry = point[0] - rest_body.x, point[1] - rest_body.y
-    c, s = math.cos(body.theta), math.sin(body.theta)
-    return body.x + c * rx - s * ry, body.y + s * rx + c * ry
-
-
-def dist(p, q) -> float:
-    return math.hypot(p[0] - q[0], p[1] - q[1])
 
 
 blocks = st.builds(Block, width=st.floats(0.1, 3.0), height=st.floats(0.5, 12.0))
