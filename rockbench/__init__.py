@@ -16,11 +16,10 @@ omega_g / p with alpha and p of the taller column.
 
 from __future__ import annotations
 
-from typing import Any
-
 from .engines import available_backends, backend_names, engine_info, get_backend
 from .errors import ParameterError, RecordError, RockbenchError, SceneError
 from .result import Result
+from .runner import info, run
 from .scene import (Block, Devices, Frame, GroundMotion, Record, RickerPulse, Scene,
                     builtin_scenes, load_record, load_scene, make_pulse)
 
@@ -30,35 +29,3 @@ __all__ = ["Block", "Frame", "Devices", "Scene", "GroundMotion", "RickerPulse", 
            "Result", "load_scene", "load_record", "builtin_scenes", "make_pulse", "run", "info",
            "get_backend", "backend_names", "available_backends", "engine_info",
            "RockbenchError", "ParameterError", "SceneError", "RecordError", "__version__"]
-
-
-def run(scene: Scene, motion: GroundMotion | None = None, *, engine: str = "analytic",
-        duration: float | None = None, phi0: float = 0.0, settings: Any = None,
-        **setting_overrides: Any) -> Result:
-    """Simulate ``scene`` under ``motion`` with one backend.
-
-    Parameters
-    ----------
-    scene : Scene
-    motion : GroundMotion or None
-        A Ricker pulse or a record; None for free rocking from ``phi0``.
-    engine : str
-        A registered backend name (``rockbench.backend_names()``).
-    duration : float, optional
-        Simulated time [s] from the motion's start (default: motion length + 10 s).
-    phi0 : float
-        Initial rotation [rad] (free rocking).
-    settings : the backend's Settings, optional; ``setting_overrides`` replace single fields
-        (e.g. ``dt=2e-4``).
-    """
-    backend = get_backend(engine)(scene, settings, **setting_overrides)
-    return backend.run(motion, duration=duration, phi0=phi0)
-
-
-def info(scene: Scene) -> dict[str, Any]:
-    """The analytic constants of ``scene``: alpha [rad], p [rad/s], eta and lambda of both
-    directions, critical, fall and fracture angles [rad], masses [kg] (keys as in
-    ``rockbench info --json``)."""
-    from .analytic.reference import Reference
-
-    return Reference(scene).constants()

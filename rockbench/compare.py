@@ -101,22 +101,11 @@ _STR_COLUMNS = ("backend", "engine_version", "status", "reason")
 # =========================================================================================
 # The analytic constants of a scene (cached: a Reference is built from the scene once)
 # =========================================================================================
-_REF_CACHE: dict[int, tuple[Scene, Any]] = {}
-
-
 def _reference_of(scene: Scene):
     """``rockbench.analytic.reference.Reference`` of ``scene`` (pure physics, cached)."""
-    from .analytic.reference import Reference
+    from .analytic.reference import reference_of
 
-    key = id(scene)
-    hit = _REF_CACHE.get(key)
-    if hit is not None and hit[0] is scene:
-        return hit[1]
-    ref = Reference(scene)
-    if len(_REF_CACHE) > 64:
-        _REF_CACHE.clear()
-    _REF_CACHE[key] = (scene, ref)
-    return ref
+    return reference_of(scene)
 
 
 def _inertia0(scene: Scene, direction: int) -> float:

@@ -18,13 +18,13 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
 
 __all__ = ["Result", "Summary", "Cost", "HISTORY_COLUMNS", "CONTACT_COLUMNS", "EVENT_COLUMNS",
-           "EVENT_KINDS", "STATUSES"]
+           "EVENT_KINDS", "STATUSES", "output_grid", "motion_label"]
 
 #: History columns and units, in order.
 HISTORY_COLUMNS: dict[str, str] = {
@@ -180,3 +180,59 @@ def events_frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
             df[c] = np.nan
     df["direction"] = df["direction"].fillna(0).astype("int64")
     return df[list(EVENT_COLUMNS)]
+
+
+def output_grid(t0: float, t_end: float, output_dt: float) -> np.ndarray:
+    """The output times [s]: t0 + k output_dt up to t_end, and t_end itself when it is not on
+    that grid (the analytic backend's grid, so that histories align sample by sample)."""
+    n = int(math.floor((t_end - t0) / output_dt + 1e-9)) + 1
+    tg = t0 + output_dt * np.arange(n)
+    if tg[-1] < t_end - 1e-12:
+        tg = np.append(tg, t_end)
+    return tg
+
+
+def _g4(x: Any) -> str:
+    try:
+        return f"{float(x):.4g}"
+    except (TypeError, ValueError):
+        return str(x)
+
+
+def motion_label(motion: Mapping[str, Any] | None, *, long: bool = False) -> str:
+    """The one human label of a ground motion, from ``GroundMotion.describe()`` (what a
+    :class:`Result` keeps in ``motion``) or from a case's motion spec
+    (:func:`rockbench.scene.motion.motion_from_spec`); None or ``{"kind": "none"}`` is free
+    rocking.
+
+    Short (default): ``"symm+ A=3 W=4"``, ``"anti- a=2.1 m/s2 T=0.8 s"``, ``"LA21 x-1"``,
+    ``"free rocking"``. Long: ``"symmetric Ricker pulse, sign +1, A = 3, W = 4 (a_g = 4.2 m/s^2,
+    T_g = 1.09 s)"``, ``"record LA21 (scale -1)"``. A and W are a_g / (g tan alpha) and
+    omega_g / p; a_g in m/s^2, T_g in s.
+    """
+    m = dict(motion or {"kind": "none"})
+    kind = m.get("kind", "none")
+    if kind == "none":
+        return "free rocking"
+    if kind == "ricker":
+        shape, sign = str(m.get("shape", "symmetric")), int(m.get("sign", 1))
+        amp = m.get("amplitude_m_s2", m.get("amplitude"))
+        per = m.get("period_s", m.get("period"))
+        if not long:
+            if "A" in m and "W" in m:
+                return f"{shape[:4]}{'+' if sign > 0 else '-'} A={m['A']:g} W={m['W']:g}"
+            return f"{shape[:4]}{'+' if sign > 0 else '-'} a={_g4(amp)} m/s2 T={_g4(per)} s"
+        text = f"{shape} Ricker pulse, sign {sign:+d}"
+        if "A" in m and "W" in m:
+            text += f", A = {m['A']:g}, W = {m['W']:g}"
+        if amp is not None and per is not None:
+            text += f" (a_g = {_g4(amp)} m/s^2, T_g = {_g4(per)} s)"
+        return text
+    if kind == "record":
+        name = m.get("name") or (str(m.get("path", "")).replace("\\", "/").rsplit("/", 1)[-1]
+                                 .rsplit(".", 1)[0]) or "record"
+        scale = float(m.get("scale", 1.0) or 1.0)
+        if long:
+            return f"record {name}" + (f" (scale {scale:g})" if scale != 1.0 else "")
+        return name + (f" x{scale:g}" if scale != 1.0 else "")
+    return str(kind)

@@ -3,7 +3,7 @@
     I(phi) phi'' + J(phi) phi'^2 + G(phi) g + K(phi) + D(phi) phi' = B(phi) u_g''
 
 With T = 1/2 I(phi) phi'^2 and the bodies' centres of mass G_i(phi), rotations theta_i(phi)
-(:mod:`rockbench.analytic.kinematics`), Lagrange's equation (Eq. 6) gives
+(:mod:`rockbench.scene.mechanism`), Lagrange's equation (Eq. 6) gives
 
     I = sum_i m_i |dG_i/dphi|^2 + I^G_i (dtheta_i/dphi)^2              [kg m^2]
     J = 1/2 dI/dphi = sum_i m_i dG_i.d2G_i + I^G_i dtheta_i d2theta_i  [kg m^2]
@@ -24,7 +24,7 @@ from typing import NamedTuple
 from ..constants import G
 from ..scene.devices import Devices
 from ..scene.structure import Block, Frame
-from .kinematics import Configuration, mechanism
+from ..scene.mechanism import Configuration, mechanism
 
 __all__ = ["Terms", "DeviceState", "Dynamics"]
 

@@ -2,7 +2,7 @@
 Giouvanidis 2015, J. Eng. Mech. 141(8) 04015003), with the corrections the derivation demands.
 
 This module is an independent check, not part of the model: the analytic reference
-(:mod:`~rockbench.analytic.kinematics`, :mod:`~rockbench.analytic.dynamics`,
+(:mod:`~rockbench.scene.mechanism`, :mod:`~rockbench.analytic.dynamics`,
 :mod:`~rockbench.analytic.impact`) is built from first principles, and
 ``tests/analytic/test_paper.py`` compares the two. Where a printed equation disagrees with the
 derivation, the function takes ``corrected``: ``corrected=False`` evaluates the equation *as
@@ -42,7 +42,7 @@ import numpy as np
 from ..constants import G
 from ..errors import ParameterError, check_finite, check_nonnegative, check_positive
 from ..scene.devices import Devices
-from ..scene.structure import Frame, _direction
+from ..scene.structure import Frame, check_direction
 from .dynamics import Terms
 
 __all__ = [
@@ -166,7 +166,7 @@ def symbols(frame: Frame, direction: int, *, r_BC: float | None = None,
     mid-span and mid-depth); pass them to evaluate the closed forms with other values.
     """
     f = _frame(frame)
-    s = _direction(direction)
+    s = check_direction(direction)
     r_geo, psi_geo = f.beam_offset(s)
     r = r_geo if r_BC is None else check_positive("r_BC", r_BC)
     psi = psi_geo if psi_BC is None else check_finite("psi_BC", psi_BC)
@@ -314,7 +314,7 @@ def angle_rates(frame: Frame, direction: int, phi) -> AngleRates:
 
     The paper defines the derivatives (Eqs. 3-4) without closed forms; these are the
     chain-rule derivatives of the corrected Eq. 1 (a route independent of the loop-closure
-    linear system used by :mod:`rockbench.analytic.kinematics`).
+    linear system used by :mod:`rockbench.scene.mechanism`).
     """
     S = symbols(frame, direction)
     return _rates(S, absolute_angle(frame, direction, phi), phi)
@@ -821,7 +821,7 @@ def printed_beam_offset_height(frame: Frame, direction: int) -> float:
     2 m beam, which Eqs. 21, 23-27 and 37 use).
     """
     f = _frame(frame)
-    s = _direction(direction)
+    s = check_direction(direction)
     dx = 0.5 * f.L - s * f.b
     r = PRINTED_R_BC[s]
     if r <= abs(dx):

@@ -7,6 +7,7 @@ themselves (critical angles, energies), the analytic solver uses it to integrate
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -17,7 +18,43 @@ from ..scene.scene import Scene
 from .dynamics import Dynamics
 from .impact import eta as eta_of
 
-__all__ = ["Reference"]
+__all__ = ["Reference", "reference_of", "CONSTANTS"]
+
+
+#: Units and meaning of the keys of :meth:`Reference.constants` (``rockbench info``).
+CONSTANTS: dict[str, tuple[str, str]] = {
+    "alpha": ("rad", "slenderness of the taller column, atan(b/H)"),
+    "p": ("rad/s", "frequency parameter of the taller column, sqrt(3g/(4R))"),
+    "eta_ccw": ("-", "restitution of an impact after which it rocks counterclockwise"),
+    "eta_cw": ("-", "restitution of an impact after which it rocks clockwise"),
+    "lambda_ccw": ("g", "ground acceleration that uplifts counterclockwise (signed)"),
+    "lambda_cw": ("g", "ground acceleration that uplifts clockwise (signed)"),
+    "phi_cr_ccw": ("rad", "critical angle, counterclockwise"),
+    "phi_cr_cw": ("rad", "critical angle, clockwise"),
+    "phi_fall_ccw": ("rad", "fall angle (overturned), counterclockwise"),
+    "phi_fall_cw": ("rad", "fall angle (overturned), clockwise"),
+    "phi_cr_ccw_fractured": ("rad", "critical angle after tendon fracture, counterclockwise"),
+    "phi_cr_cw_fractured": ("rad", "critical angle after tendon fracture, clockwise"),
+    "phi_fracture_ccw": ("rad", "rotation at which a tendon fractures, counterclockwise"),
+    "phi_fracture_cw": ("rad", "rotation at which a tendon fractures, clockwise"),
+    "mass": ("kg", "mass of the block"),
+    "mass_left": ("kg", "mass of the left (taller) column"),
+    "mass_right": ("kg", "mass of the right column"),
+    "mass_beam": ("kg", "mass of the beam"),
+    "alpha_right": ("rad", "slenderness of the right column"),
+    "r_BC_ccw": ("m", "beam centre of mass from the pivot, counterclockwise"),
+    "psi_BC_ccw": ("rad", "angle of r_BC, counterclockwise"),
+    "r_BC_cw": ("m", "beam centre of mass from the pivot, clockwise"),
+    "psi_BC_cw": ("rad", "angle of r_BC, clockwise"),
+}
+
+
+@functools.lru_cache(maxsize=128)
+def reference_of(scene: Scene) -> "Reference":
+    """The :class:`Reference` of ``scene``, computed once per scene *parameters* (scenes are
+    frozen and hashable: two equal scenes share one Reference) and reused by every run,
+    measurement and comparison of that scene in this process."""
+    return Reference(scene)
 
 
 class Reference:

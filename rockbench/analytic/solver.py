@@ -33,7 +33,8 @@ from scipy.optimize import brentq
 
 from ..constants import G
 from ..errors import ParameterError, check_positive
-from ..result import HISTORY_COLUMNS, CONTACT_COLUMNS, Cost, Result, Summary, events_frame
+from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
+                      output_grid)
 from ..scene.scene import Scene
 from .reference import Reference
 
@@ -290,11 +291,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
 def _history(ref: Reference, mot, segments, t0: float, t_end: float,
              settings: AnalyticSettings) -> pd.DataFrame:
     """Sample the piecewise solution on the uniform output grid."""
-    dt = settings.output_dt
-    n = int(math.floor((t_end - t0) / dt + 1e-9)) + 1
-    tg = t0 + dt * np.arange(n)
-    if tg[-1] < t_end - 1e-12:
-        tg = np.append(tg, t_end)
+    tg = output_grid(t0, t_end, settings.output_dt)
     phi = np.zeros_like(tg)
     phid = np.zeros_like(tg)
     mode = np.zeros(tg.size, dtype=np.int64)

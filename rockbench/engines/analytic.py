@@ -6,7 +6,7 @@ from typing import ClassVar
 
 import scipy
 
-from ..analytic.reference import Reference
+from ..analytic.reference import reference_of
 from ..analytic.solver import AnalyticSettings, simulate
 from ..result import Result
 from .base import Backend, run_window
@@ -26,7 +26,5 @@ class AnalyticBackend(Backend):
 
     def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
         t0, t_end = run_window(self.scene, motion, duration, phi0)
-        if not hasattr(self, "_ref"):
-            self._ref = Reference(self.scene)
         return simulate(self.scene, motion, duration=t_end - t0, phi0=phi0,
-                        settings=self.settings, reference=self._ref)
+                        settings=self.settings, reference=reference_of(self.scene))

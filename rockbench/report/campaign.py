@@ -42,6 +42,7 @@ from typing import Any
 import pandas as pd
 
 from ..errors import ParameterError
+from ..scene.records import find_records
 from . import figures as F
 from . import html as H
 
@@ -185,67 +186,6 @@ def _pulse_duration(scene_name: str, A: float, W: float, shape: str, tail: float
 # ==========================================================================================
 # Records
 # ==========================================================================================
-_UNIT_WORDS = (("cm/s", "cm/s2"), ("m/s", "m/s2"), ("g", "g"))
-
-
-def _units_of(text: Any) -> str:
-    t = str(text or "").strip().lower()
-    for key, units in _UNIT_WORDS:
-        if t.startswith(key):
-            return units
-    return "cm/s2"
-
-
-def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], list[str]]:
-    """Record files under ``records_dir`` (searched recursively), sorted by name: PEER
-    ``.AT2`` files (dt and units from their header) and headerless files listed in a
-    ``records.csv`` next to them (columns: ``record`` = file stem, ``dt_s`` or ``dt`` [s], and
-    ``units``: "cm/s^2..." / "m/s^2..." / "g"; cm/s^2 when absent).
-
-    Returns (records, notes): each record a dict name, path, dt [s] or None, units or None;
-    notes say which files were skipped and why.
-    """
-    root = Path(records_dir)
-    if not root.is_dir():
-        raise ParameterError("records_dir", str(records_dir), "an existing folder of record "
-                                                              "files (.AT2, or files listed "
-                                                              "in a records.csv)")
-    records, notes = [], []
-    tables: dict[Path, dict[str, dict[str, Any]]] = {}
-    for csv in sorted(root.rglob("records.csv")):
-        try:
-            df = pd.read_csv(csv)
-        except Exception as e:
-            notes.append(f"{csv}: unreadable ({e})")
-            continue
-        cols = {c.lower().strip(): c for c in df.columns}
-        name_col = cols.get("record") or cols.get("name") or df.columns[0]
-        dt_col = cols.get("dt_s") or cols.get("dt")
-        unit_col = cols.get("units") or cols.get("unit")
-        if dt_col is None:
-            notes.append(f"{csv}: no dt column (dt_s or dt); its files are skipped")
-            continue
-        tables[csv.parent] = {
-            str(r[name_col]).strip(): {"dt": float(r[dt_col]),
-                                       "units": _units_of(r[unit_col]) if unit_col else "cm/s2"}
-            for _, r in df.iterrows()}
-    for p in sorted(root.rglob("*"), key=lambda q: (q.stem.lower(), str(q))):
-        if not p.is_file() or p.name == "records.csv" or p.suffix.lower() in (".md", ".csv"):
-            continue
-        if p.suffix.lower() == ".at2":
-            records.append({"name": p.stem, "path": str(p.resolve()), "dt": None,
-                            "units": None})
-            continue
-        entry = tables.get(p.parent, {}).get(p.stem)
-        if entry is None:
-            notes.append(f"{p.name}: skipped (not an .AT2 file and not listed in a "
-                         f"records.csv with its dt)")
-            continue
-        records.append({"name": p.stem, "path": str(p.resolve()), "dt": entry["dt"],
-                        "units": entry["units"]})
-    return records, notes
-
-
 # ==========================================================================================
 # Comparison jobs (histories needed): run in worker processes, cached as small pickles
 # ==========================================================================================

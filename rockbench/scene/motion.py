@@ -27,6 +27,7 @@ import numpy as np
 
 from ..constants import G, G_STANDARD
 from ..errors import ParameterError, check_finite, check_positive
+from ..result import motion_label
 
 __all__ = [
     "GroundMotion",
@@ -35,6 +36,7 @@ __all__ = [
     "UNIT_FACTORS",
     "antisymmetric_beta",
     "make_pulse",
+    "motion_from_spec",
 ]
 
 #: Factor [m/s^2 per unit] converting accelerations in the given units to m/s^2.
@@ -137,6 +139,10 @@ class GroundMotion(abc.ABC):
     def duration(self) -> float:
         """``t_end - t_start`` [s]."""
         return self.t_end - self.t_start
+
+    def label(self, long: bool = False) -> str:
+        """The one human label of this motion (:func:`rockbench.result.motion_label`)."""
+        return motion_label(self.describe(), long=long)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -391,6 +397,38 @@ def make_pulse(shape: str, sign: int, *, structure: Any = None, A: float | None 
         return RickerPulse(amplitude, period, shape, sign)
     raise ParameterError("A", None, "given with W and structure, unless amplitude and period are",
                          "no pulse intensity was specified")
+
+
+def motion_from_spec(spec: dict[str, Any] | None, structure: Any = None) -> GroundMotion | None:
+    """The one translator from a motion *spec* (plain data: what cases, sweeps, maps and the
+    campaign store) to a :class:`GroundMotion`.
+
+    ``None`` or ``{"kind": "none"}``: free rocking (returns None).
+    ``{"kind": "ricker", "shape", "sign", "A", "W"}`` (dimensionless, needs ``structure``) or
+    ``{"kind": "ricker", "shape", "sign", "amplitude" [m/s^2], "period" [s]}``: see
+    :func:`make_pulse`. ``{"kind": "record", "path", "dt" [s], "units", "scale"}``: see
+    :func:`rockbench.scene.records.load_record` (``dt`` and ``units`` may be omitted for an
+    AT2 file).
+    """
+    if spec is None:
+        return None
+    if not isinstance(spec, dict):
+        raise ParameterError("motion", spec, "a dict with 'kind' in ricker, record, none "
+                                             "(or None)")
+    kind = spec.get("kind")
+    if kind == "none":
+        return None
+    if kind == "ricker":
+        if "A" in spec or "W" in spec:
+            return make_pulse(spec.get("shape", "symmetric"), spec.get("sign", 1),
+                              structure=structure, A=spec.get("A"), W=spec.get("W"))
+        return make_pulse(spec.get("shape", "symmetric"), spec.get("sign", 1),
+                          amplitude=spec.get("amplitude"), period=spec.get("period"))
+    if kind == "record":
+        from .records import load_record
+        return load_record(spec["path"], dt=spec.get("dt"), units=spec.get("units"),
+                           scale=spec.get("scale", 1.0))
+    raise ParameterError("motion.kind", kind, "one of ricker, record, none")
 
 
 # ------------------------------------------------------------------------------------------------

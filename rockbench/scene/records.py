@@ -18,17 +18,19 @@ Two formats (see ``shared/records/PROVENANCE.md``):
 
 from __future__ import annotations
 
+import csv
 import math
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import ParameterError, RecordError, check_finite, check_positive
 from .motion import Record, unit_factor
 
-__all__ = ["load_at2", "load_columns", "load_record"]
+__all__ = ["load_at2", "load_columns", "load_record", "find_records", "listed_metadata"]
 
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][+-]?\d+)?"
 #: Old PEER: "NPTS=   7818, DT=   .0050 SEC, ..."; NPTS and DT may come in either order.
@@ -95,6 +97,9 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
     :func:`load_columns`, which needs ``dt`` [s] and ``units``. The result is multiplied by
     ``scale`` (finite, non-zero) when it is not 1.
 
+    A headerless file listed in a ``records.csv`` beside it (see :func:`find_records`) takes
+    its dt and units from there unless they are given.
+
     Errors name the command-line options: ``record-dt``, ``record-units``, ``record-scale``.
     For an AT2 file, ``dt`` and ``units`` may be omitted; if given they must agree with the file
     (DT of the header, units of g).
@@ -114,6 +119,10 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
             raise ParameterError("record-units", units, "omitted or 'g'",
                                  f"AT2 file {path.name} is in units of g")
     else:
+        listed = listed_metadata(path) if (dt is None or units is None) else None
+        if listed is not None:        # dt and units from the records.csv beside the file
+            dt = listed["dt"] if dt is None else dt
+            units = listed["units"] if units is None else units
         if dt is None:
             raise ParameterError("record-dt", None, "> 0 [s]",
                                  f"required for the headerless record file {path.name}")
@@ -124,6 +133,94 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
         unit_factor(units, "record-units")
         record = load_columns(path, dt=dt, units=units)
     return record if scale == 1.0 else record.scaled(scale)
+
+
+_UNIT_WORDS = (("cm/s", "cm/s2"), ("m/s", "m/s2"), ("g", "g"))
+
+
+def _units_of(text: Any) -> str:
+    t = str(text or "").strip().lower()
+    for key, units in _UNIT_WORDS:
+        if t.startswith(key):
+            return units
+    return "cm/s2"
+
+
+def _read_listing(csv_path: Path) -> dict[str, dict[str, Any]]:
+    """``records.csv`` as {file stem: {"dt": s, "units": ...}}; RecordError if unreadable or
+    without a dt column (``dt_s`` or ``dt``)."""
+    try:
+        with open(csv_path, newline="", encoding="utf-8") as f:
+            rows = list(csv.DictReader(f))
+    except (OSError, UnicodeDecodeError, csv.Error) as e:
+        raise RecordError(f"{csv_path}: unreadable ({e})") from None
+    if not rows:
+        return {}
+    cols = {c.lower().strip(): c for c in rows[0] if c}
+    name_col = cols.get("record") or cols.get("name") or next(iter(rows[0]))
+    dt_col = cols.get("dt_s") or cols.get("dt")
+    unit_col = cols.get("units") or cols.get("unit")
+    if dt_col is None:
+        raise RecordError(f"{csv_path}: no dt column (dt_s or dt)")
+    out = {}
+    for r in rows:
+        try:
+            dt = float(r[dt_col])
+        except (TypeError, ValueError):
+            raise RecordError(f"{csv_path}: record {r.get(name_col)!r} has dt "
+                              f"{r.get(dt_col)!r}, not a number") from None
+        out[str(r[name_col]).strip()] = {
+            "dt": dt, "units": _units_of(r[unit_col]) if unit_col else "cm/s2"}
+    return out
+
+
+def listed_metadata(path: str | os.PathLike) -> dict[str, Any] | None:
+    """dt [s] and units of a headerless record file from the ``records.csv`` beside it
+    (columns ``record`` = file stem, ``dt_s`` or ``dt``, ``units``), or None if it is not
+    listed there."""
+    p = Path(path)
+    listing = p.parent / "records.csv"
+    if not listing.is_file():
+        return None
+    return _read_listing(listing).get(p.stem)
+
+
+def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], list[str]]:
+    """Record files under ``records_dir`` (searched recursively), sorted by name: PEER
+    ``.AT2`` files (dt and units from their header) and headerless files listed in a
+    ``records.csv`` next to them (columns: ``record`` = file stem, ``dt_s`` or ``dt`` [s], and
+    ``units``: "cm/s^2..." / "m/s^2..." / "g"; cm/s^2 when absent).
+
+    Returns (records, notes): each record a dict name, path, dt [s] or None, units or None;
+    notes say which files were skipped and why.
+    """
+    root = Path(records_dir)
+    if not root.is_dir():
+        raise ParameterError("records_dir", str(records_dir), "an existing folder of record "
+                                                              "files (.AT2, or files listed "
+                                                              "in a records.csv)")
+    records, notes = [], []
+    tables: dict[Path, dict[str, dict[str, Any]]] = {}
+    for listing in sorted(root.rglob("records.csv")):
+        try:
+            tables[listing.parent] = _read_listing(listing)
+        except RecordError as e:
+            notes.append(f"{e}; its files are skipped")
+    for p in sorted(root.rglob("*"), key=lambda q: (q.stem.lower(), str(q))):
+        if not p.is_file() or p.name == "records.csv" or p.suffix.lower() in (".md", ".csv"):
+            continue
+        if p.suffix.lower() == ".at2":
+            records.append({"name": p.stem, "path": str(p.resolve()), "dt": None,
+                            "units": None})
+            continue
+        entry = tables.get(p.parent, {}).get(p.stem)
+        if entry is None:
+            notes.append(f"{p.name}: skipped (not an .AT2 file and not listed in a "
+                         f"records.csv with its dt)")
+            continue
+        records.append({"name": p.stem, "path": str(p.resolve()), "dt": entry["dt"],
+                        "units": entry["units"]})
+    return records, notes
 
 
 # ------------------------------------------------------------------------------------------------

@@ -68,7 +68,7 @@ class Scene:
             object.__setattr__(self, "fall_angle", check_range(
                 "fall_angle", self.fall_angle, 0.0, math.pi, lo_open=True))
         if isinstance(self.structure, Frame):
-            from ..analytic.kinematics import geometric_limit, mechanism
+            from .mechanism import geometric_limit, mechanism
             lims = {s: geometric_limit(mechanism(self.structure, s)) for s in (1, -1)}
             if min(lims.values()) < self.structure.alpha:
                 raise ParameterError(
@@ -104,7 +104,7 @@ class Scene:
         """Fall angle [rad] for each rocking direction (+1, -1)."""
         if self.fall_angle is not None:
             return {1: self.fall_angle, -1: self.fall_angle}
-        from ..analytic.kinematics import geometric_limit, mechanism
+        from .mechanism import geometric_limit, mechanism
         return {s: min(math.pi / 2, 0.98 * geometric_limit(mechanism(self.structure, s)))
                 for s in (1, -1)}
 

@@ -25,7 +25,7 @@ from typing import Any, ClassVar
 from ..constants import G
 from ..errors import ParameterError, check_positive
 
-__all__ = ["Block", "Frame", "Structure"]
+__all__ = ["Block", "Frame", "Structure", "check_direction"]
 
 
 def _frequency_parameter(R: float) -> float:
@@ -291,7 +291,7 @@ class Frame:
         corners, B, C the top-right corners) or -1 (clockwise: A', D' bottom-right, B', C'
         top-left).
         """
-        s = _direction(direction)
+        s = check_direction(direction)
         b, L = self.b, self.L
         top = self.column_height_left
         return {"A": (-s * b, 0.0), "B": (s * b, top), "C": (L + s * b, top),
@@ -313,7 +313,9 @@ class Frame:
 Structure = Block | Frame
 
 
-def _direction(direction: int) -> int:
+def check_direction(direction: int) -> int:
+    """``direction`` as int if it is +1 (counterclockwise) or -1 (clockwise); ParameterError
+    otherwise."""
     if direction not in (1, -1):
         raise ParameterError("direction", direction, "+1 (counterclockwise) or -1 (clockwise)")
     return int(direction)

@@ -4,7 +4,7 @@ import math
 
 from hypothesis import strategies as st
 
-from rockbench.analytic.kinematics import geometric_limit, mechanism
+from rockbench.scene.mechanism import geometric_limit, mechanism
 from rockbench.scene.structure import Frame
 
 #: Random frames (asymmetric or symmetric, slender or squat) for which the three-block mechanism

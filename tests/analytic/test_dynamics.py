@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rockbench.analytic.dynamics import Dynamics
-from rockbench.analytic.kinematics import geometric_limit
+from rockbench.scene.mechanism import geometric_limit
 from rockbench.analytic.reference import Reference
 from rockbench.constants import G
 from rockbench.scene.devices import Devices

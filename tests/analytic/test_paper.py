@@ -21,7 +21,7 @@ from scipy.optimize import brentq
 from rockbench.analytic import paper as P
 from rockbench.analytic.dynamics import Dynamics
 from rockbench.analytic.impact import eta
-from rockbench.analytic.kinematics import FrameMechanism, geometric_limit
+from rockbench.scene.mechanism import FrameMechanism, geometric_limit
 from rockbench.constants import G
 from rockbench.errors import ParameterError
 from rockbench.scene.devices import Devices

@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import cumulative_simpson, solve_ivp
 from scipy.optimize import brentq
 
-from rockbench.analytic.kinematics import geometric_limit, mechanism
+from rockbench.scene.mechanism import geometric_limit, mechanism
 from rockbench.analytic.reference import Reference
 from rockbench.analytic.solver import AnalyticSettings, simulate
 from rockbench.constants import G

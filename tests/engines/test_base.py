@@ -21,7 +21,7 @@ import pytest
 
 import rockbench as rb
 from rockbench.analytic.dynamics import Dynamics
-from rockbench.analytic.kinematics import mechanism
+from rockbench.scene.mechanism import mechanism
 from rockbench.analytic.reference import Reference
 from rockbench.engines.base import (DAMPER_MODELS, ContactProbe, DeviceGeometry, EngineBackend,
                                     EngineSettings, PointForce, body_specs, excursions,

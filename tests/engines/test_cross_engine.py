@@ -25,7 +25,7 @@ import pytest
 
 import cases
 import rockbench as rb
-from rockbench.analytic.kinematics import mechanism
+from rockbench.scene.mechanism import mechanism
 from rockbench.analytic.reference import Reference
 from rockbench.engines import available_backends, get_backend
 from rockbench.errors import ParameterError

@@ -14,7 +14,7 @@ import pytest
 
 import rockbench as rb
 from rockbench.analytic.dynamics import Dynamics
-from rockbench.analytic.kinematics import mechanism
+from rockbench.scene.mechanism import mechanism
 from rockbench.engines.base import DeviceGeometry, PointForce
 from rockbench.errors import ParameterError
 

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rockbench.analytic.kinematics import FrameMechanism, geometric_limit, mechanism
+from rockbench.scene.mechanism import FrameMechanism, geometric_limit, mechanism
 from rockbench.scene.scene import load_scene
 from rockbench.scene.structure import Block, Frame
 from strategies import dist, frames, material_point

@@ -25,7 +25,7 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from ..scene.structure import Block, Frame, _direction
+from .structure import Block, Frame, check_direction
 
 __all__ = ["BodyKinematics", "Configuration", "BlockMechanism", "FrameMechanism",
            "mechanism", "geometric_limit"]
@@ -84,7 +84,7 @@ class BlockMechanism:
     body_names = ("block",)
 
     def __post_init__(self) -> None:
-        _direction(self.direction)
+        check_direction(self.direction)
 
     @property
     def pivot(self) -> tuple[float, float]:
@@ -119,7 +119,7 @@ class FrameMechanism:
     body_names = ("left", "beam", "right")
 
     def __post_init__(self) -> None:
-        s = _direction(self.direction)
+        s = check_direction(self.direction)
         f = self.frame
         piv = f.pivots(s)
         A, B0, C0, D = piv["A"], piv["B"], piv["C"], piv["D"]

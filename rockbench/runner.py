@@ -1,0 +1,133 @@
+"""Running backends: the only module that instantiates them.
+
+* :func:`run` - one scene, one motion, one backend -> :class:`~rockbench.result.Result`;
+* :func:`run_all` - one scene, one motion, several backends (the reference first) -> Results
+  and the reasons of the backends that could not run here;
+* :func:`info` - the analytic constants of a scene (``rockbench info``);
+* :func:`resolve_engines` - validate backend names (None: every available one).
+
+Everything above (compare, sweeps, maps, the campaign, the command line) goes through here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from .engines import REGISTRY, available_backends, get_backend
+from .errors import BackendUnavailable, ParameterError
+from .result import Result
+from .scene.scene import Scene
+
+__all__ = ["REFERENCE", "run", "run_all", "info", "resolve_engines"]
+
+#: Name of the reference backend every metric is measured against.
+REFERENCE = "analytic"
+
+
+def run(scene: Scene, motion=None, *, engine: str = "analytic",
+        duration: float | None = None, phi0: float = 0.0, settings: Any = None,
+        **setting_overrides: Any) -> Result:
+    """Simulate ``scene`` under ``motion`` with one backend.
+
+    Parameters
+    ----------
+    scene : Scene
+    motion : GroundMotion or None
+        A Ricker pulse or a record; None for free rocking from ``phi0``.
+    engine : str
+        A registered backend name (``rockbench.backend_names()``).
+    duration : float, optional
+        Simulated time [s] from the motion's start (default: motion length + 10 s).
+    phi0 : float
+        Initial rotation [rad] (free rocking).
+    settings : the backend's Settings, optional; ``setting_overrides`` replace single fields
+        (e.g. ``dt=2e-4``).
+    """
+    backend = get_backend(engine)(scene, settings, **setting_overrides)
+    return backend.run(motion, duration=duration, phi0=phi0)
+
+
+def resolve_engines(engines: str | Sequence[str] | None, *, name: str = "engines"
+                    ) -> list[str]:
+    """Backend names, in order, without duplicates; None: every available backend. Unknown
+    names raise ParameterError naming ``name`` and the registered names."""
+    if engines is None:
+        return available_backends()
+    if isinstance(engines, str):
+        engines = [engines]
+    names = list(dict.fromkeys(engines))
+    for n in names:
+        if not isinstance(n, str) or n not in REGISTRY:
+            raise ParameterError(name, n, f"registered backend names: {', '.join(REGISTRY)}")
+    return names
+
+
+def _settings_for(settings: Mapping[str, Any] | None, name: str) -> tuple[Any, dict[str, Any]]:
+    """(settings object or None, overrides dict) for backend ``name``."""
+    if not settings or name not in settings or settings[name] is None:
+        return None, {}
+    s = settings[name]
+    if isinstance(s, Mapping):
+        return None, dict(s)
+    return s, {}
+
+
+def run_all(scene: Scene, motion=None, *, engines: str | Sequence[str] | None = None,
+            phi0: float = 0.0, duration: float | None = None,
+            settings: Mapping[str, Any] | None = None, progress: bool = False
+            ) -> tuple[dict[str, Result], dict[str, str]]:
+    """Run the reference and every selected backend on one scene and motion.
+
+    Returns ``(results, unavailable)``: backend name -> Result (the reference ``"analytic"``
+    first), and backend name -> why it could not run here (its engine does not import).
+    ``settings`` maps a backend name to its Settings object or a dict of overrides (e.g.
+    ``{"pymunk": {"dt": 2e-4}}``); ``progress`` shows a tqdm bar naming the running backend.
+    """
+    if not isinstance(scene, Scene):
+        raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")
+    names = resolve_engines(engines)
+    if settings is not None:
+        if not isinstance(settings, Mapping):
+            raise ParameterError("settings", type(settings).__name__,
+                                 "a dict: backend name -> Settings or dict of overrides")
+        for k in settings:
+            if k not in REGISTRY:
+                raise ParameterError("settings", k,
+                                     f"keyed by backend names: {', '.join(REGISTRY)}")
+    order = [REFERENCE] + [n for n in names if n != REFERENCE]
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(order), desc="compare", unit="backend")
+    results: dict[str, Result] = {}
+    unavailable: dict[str, str] = {}
+    try:
+        for name in order:
+            if bar is not None:
+                bar.set_description(f"{scene.name}: {name}")
+            obj, over = _settings_for(settings, name)
+            try:
+                results[name] = run(scene, motion, engine=name, duration=duration, phi0=phi0,
+                                    settings=obj, **over)
+            except BackendUnavailable as e:
+                if name == REFERENCE:
+                    raise
+                unavailable[name] = str(e)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    return results, unavailable
+
+
+def info(scene: Scene) -> dict[str, Any]:
+    """The analytic constants of ``scene``: alpha [rad], p [rad/s], eta and lambda of both
+    directions, critical, fall and fracture angles [rad], masses [kg] (keys and units:
+    :data:`rockbench.analytic.reference.CONSTANTS`, as in ``rockbench info --json``)."""
+    from .analytic.reference import reference_of
+
+    if not isinstance(scene, Scene):
+        raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")
+    return reference_of(scene).constants()
