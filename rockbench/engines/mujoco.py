@@ -63,7 +63,8 @@ import numpy as np
 
 from ..constants import G
 from ..errors import ParameterError, check_finite, check_range
-from .base import DAMPER_MODELS, EngineBackend, EngineSettings, PointForce
+from .base import EngineBackend, EngineSettings
+from .devices import DAMPER_MODELS, PointForce
 
 __all__ = ["MujocoBackend", "MujocoSettings"]
 
@@ -111,7 +112,7 @@ class MujocoSettings(EngineSettings):
     devices : "native" (default: MuJoCo tendons and joint damping) or "forces" (the shared
         point forces computed from the poses).
     damper : damper model, "distributed" (default), "couple" or "heel" (see the module and
-        :class:`rockbench.engines.base.DeviceGeometry`).
+        :class:`rockbench.engines.devices.DeviceGeometry`).
     """
 
     dt: float = 1e-3
@@ -207,12 +208,7 @@ class MujocoBackend(EngineBackend):
     def compile(self, phi0: float = 0.0):
         """Build the model and data of the scene at rotation ``phi0`` [rad] outside a run (for
         inspection and tests); returns the ``mujoco.MjModel`` (``self.data`` is its data)."""
-        from .base import body_specs, foundation_spec, initial_poses
-
-        self.specs = body_specs(self.scene)
-        self.foundation = foundation_spec(self.scene)
-        self.poses0 = initial_poses(self.scene, phi0)
-        self._build()
+        self.build(phi0)
         return self.model
 
     def _native(self) -> bool:

@@ -47,7 +47,8 @@ import numpy as np
 
 from ..constants import G
 from ..errors import ParameterError
-from .base import DAMPER_MODELS, EngineBackend, EngineSettings, PointForce
+from .base import EngineBackend, EngineSettings
+from .devices import DAMPER_MODELS, PointForce
 
 __all__ = ["PybulletBackend", "PybulletSettings"]
 
@@ -82,7 +83,7 @@ class PybulletSettings(EngineSettings):
     virtual_mass_ratio : mass of each of the two virtual links of the planar joint chain as a
         fraction of the body's mass, in (0, 1e-3].
     damper : how the shared machinery applies the dampers' force (one of
-        :data:`rockbench.engines.base.DAMPER_MODELS`): "distributed" (default: forces in
+        :data:`rockbench.engines.devices.DAMPER_MODELS`): "distributed" (default: forces in
         proportion to every body's momentum that dissipate exactly the damper's power and
         change no contact reaction), "couple" (a couple on each column) or "heel" (the force
         at the heel corner). With "couple" the right column's velocity chatters in Bullet's

@@ -5,7 +5,7 @@ beam's m rho^2 of the scene, not its box's) and one box ``Poly``; the foundation
 segment and, for the asymmetric frame, the step box) is static. Every shape gets friction
 sqrt(mu) (pymunk multiplies a pair's coefficients) and no elasticity. Ground motion is the
 shared time-varying gravity. Tendons and dampers are the shared
-:class:`rockbench.engines.base.DeviceGeometry` forces (tendon elongation = base opening + top
+:class:`rockbench.engines.devices.DeviceGeometry` forces (tendon elongation = base opening + top
 opening, exactly), summed into one force and one torque per body before every step; pymunk's
 own ``DampedSpring`` is not used (a straight spring from the foundation to the beam would be up
 to 0.4 % shorter over the rocking range, see ``tests/engines/test_pymunk.py``).
@@ -22,7 +22,8 @@ import numpy as np
 
 from ..constants import G
 from ..errors import ParameterError
-from .base import DAMPER_MODELS, EngineBackend, EngineSettings, PointForce, net_wrenches
+from .base import EngineBackend, EngineSettings
+from .devices import DAMPER_MODELS, PointForce, net_wrenches
 
 __all__ = ["PymunkBackend", "PymunkSettings"]
 
@@ -44,9 +45,9 @@ class PymunkSettings(EngineSettings):
     collision_bias : fraction of the overlap beyond the slop left after 1 s (pymunk's default
         (1 - 0.1)^60; the results hardly depend on it).
     damper : how the dampers' force reaches the bodies, one of
-        :data:`~rockbench.engines.base.DAMPER_MODELS` (default "distributed": the damper power
+        :data:`~rockbench.engines.devices.DAMPER_MODELS` (default "distributed": the damper power
         taken from each body in proportion to its momentum; "couple" and "heel" make the
-        hybrid frame slide by 4 cm to 1 m, see :class:`~rockbench.engines.base.DeviceGeometry`).
+        hybrid frame slide by 4 cm to 1 m, see :class:`~rockbench.engines.devices.DeviceGeometry`).
 
     Inherited (:class:`~rockbench.engines.base.EngineSettings`): output_dt, uplift_tol,
     max_penetration, max_sliding, energy_gain_tol.

@@ -23,9 +23,12 @@ import rockbench as rb
 from rockbench.analytic.dynamics import Dynamics
 from rockbench.scene.mechanism import mechanism
 from rockbench.analytic.reference import Reference
-from rockbench.engines.base import (DAMPER_MODELS, ContactProbe, DeviceGeometry, EngineBackend,
-                                    EngineSettings, PointForce, body_specs, excursions,
-                                    initial_poses, measure_impacts, net_wrenches, output_grid)
+from rockbench.engines.base import EngineBackend, EngineSettings
+from rockbench.engines.bodies import body_specs, initial_poses
+from rockbench.engines.contacts import ContactProbe
+from rockbench.engines.devices import DAMPER_MODELS, DeviceGeometry, PointForce, net_wrenches
+from rockbench.measure import excursions, measure_impacts
+from rockbench.result import output_grid
 from rockbench.errors import ParameterError
 from rockbench.result import CONTACT_COLUMNS, HISTORY_COLUMNS
 

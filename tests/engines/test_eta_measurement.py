@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import rockbench as rb
-from rockbench.engines.base import measure_impacts
+from rockbench.measure import measure_impacts
 
 
 @pytest.mark.parametrize("A, W, shape, sign", [(5.0, 5.0, "symmetric", 1),

@@ -15,7 +15,7 @@ import pytest
 import rockbench as rb
 from rockbench.analytic.dynamics import Dynamics
 from rockbench.scene.mechanism import mechanism
-from rockbench.engines.base import DeviceGeometry, PointForce
+from rockbench.engines.devices import DeviceGeometry, PointForce
 from rockbench.errors import ParameterError
 
 mujoco = pytest.importorskip("mujoco")

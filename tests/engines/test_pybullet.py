@@ -12,7 +12,8 @@ import pytest
 
 import rockbench as rb
 from rockbench.constants import G
-from rockbench.engines.base import PointForce, body_specs, foundation_spec, initial_poses
+from rockbench.engines.bodies import body_specs, foundation_spec, initial_poses
+from rockbench.engines.devices import PointForce
 from rockbench.errors import ParameterError
 from rockbench.scene.scene import Scene
 from rockbench.scene.structure import Block

@@ -10,8 +10,8 @@ import pytest
 
 import rockbench as rb
 from rockbench.analytic.dynamics import Dynamics
-from rockbench.engines.base import (DeviceGeometry, body_specs, foundation_spec,
-                                    initial_poses)
+from rockbench.engines.bodies import body_specs, foundation_spec, initial_poses
+from rockbench.engines.devices import DeviceGeometry
 from rockbench.errors import ParameterError
 
 pymunk = pytest.importorskip("pymunk")

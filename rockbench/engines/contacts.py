@@ -1,0 +1,107 @@
+"""Contact diagnostics measured from body poses only, the same way for every engine:
+penetration, sliding and opening of the contacts the analytic model assumes.
+
+Lengths in m (``docs/conventions.md``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene.scene import Scene
+from ..scene.structure import Frame
+from .bodies import BodySpec, body_specs
+
+__all__ = ["ContactProbe", "contact_diagnostics"]
+
+
+def _corners(sp: BodySpec):
+    hw, hh = sp.half_width, sp.half_height
+    return {"bl": (-hw, -hh), "br": (hw, -hh), "tl": (-hw, hh), "tr": (hw, hh)}
+
+
+class ContactProbe:
+    """Penetration, sliding and opening of the contacts the analytic model assumes, computed
+    from body poses only (so every engine is measured the same way).
+
+    * base contacts: the two base corners of each column (block) on the foundation surface
+      (y = 0, or the step's top under the right column);
+    * top contacts: the two top corners of each column against the beam soffit, in the beam's
+      frame.
+
+    Penetration [m]: depth of a corner below (inside) the surface it rests on. Sliding [m]:
+    tangential distance of a corner from its rest position along its surface, counted while
+    the corner is in contact (gap < ``tol``), so a pivot that creeps or a beam that slides on
+    the column tops shows up, but a heel that swings while lifted does not. Opened: a contact
+    the analytic model keeps closed has a gap above ``open_tol``: a pivot of the current
+    mechanism while the structure rocks (mode +1: bottom-left and top-right corners, mode -1:
+    bottom-right and top-left), or any of them at rest (mode 0).
+    """
+
+    def __init__(self, scene: Scene, specs: list[BodySpec], tol: float = 1e-3,
+                 open_tol: float = 5e-3):
+        self.specs = specs
+        self.tol = tol
+        self.open_tol = open_tol
+        self.frame = isinstance(scene.structure, Frame)
+        self.cols = [0, 2] if self.frame else [0]
+        self.base_y = {i: specs[i].y - specs[i].half_height for i in self.cols}
+        self.rest = {}
+        for i in self.cols:
+            sp = specs[i]
+            for name, (lx, ly) in _corners(sp).items():
+                self.rest[(i, name)] = (sp.x + lx, sp.y + ly)
+        self.beam = specs[1] if self.frame else None
+
+    def measure(self, state: np.ndarray, mode: int) -> tuple[float, float, bool]:
+        """(penetration [m], sliding [m], contact opened) for one state (n_bodies, 6) and
+        rocking mode (+1, -1, 0)."""
+        pen, sl, op = self.measure_many(np.asarray(state, dtype=float)[None],
+                                        np.array([mode]))
+        return float(pen[0]), float(sl[0]), bool(op[0])
+
+    def measure_many(self, states: np.ndarray, modes: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorized :meth:`measure` over states (n, n_bodies, 6) and modes (n,): arrays of
+        penetration [m], sliding [m] and opened flags."""
+        states = np.asarray(states, dtype=float)
+        modes = np.asarray(modes)
+        n = states.shape[0]
+        pen = np.zeros(n)
+        slide = np.zeros(n)
+        opened = np.zeros(n, dtype=bool)
+        rocking = modes != 0
+        if self.frame:
+            bx, by, bth = states[:, 1, 0], states[:, 1, 1], states[:, 1, 2]
+            bc, bs_ = np.cos(bth), np.sin(bth)
+        for i in self.cols:
+            sp = self.specs[i]
+            x, y, th = states[:, i, 0], states[:, i, 1], states[:, i, 2]
+            c, s = np.cos(th), np.sin(th)
+            for name, (lx, ly) in _corners(sp).items():
+                X = x + c * lx - s * ly
+                Y = y + s * lx + c * ly
+                rx0, _ = self.rest[(i, name)]
+                if name in ("bl", "br"):
+                    gap = Y - self.base_y[i]
+                    tang = X - rx0
+                    pivot = modes > 0 if name == "bl" else modes < 0
+                else:
+                    if not self.frame:
+                        continue
+                    rx, ry = X - bx, Y - by
+                    u = bc * rx + bs_ * ry
+                    v = -bs_ * rx + bc * ry
+                    gap = -(v + self.beam.half_height)      # < 0: corner inside the beam
+                    tang = u - (rx0 - self.beam.x)
+                    pivot = modes > 0 if name == "tr" else modes < 0
+                np.maximum(pen, -gap, out=pen)
+                touch = gap < self.tol
+                np.maximum(slide, np.where(touch, np.abs(tang), 0.0), out=slide)
+                opened |= (gap > self.open_tol) & (pivot | ~rocking)
+        return pen, slide, opened
+
+
+def contact_diagnostics(scene: Scene, state: np.ndarray, mode: int) -> tuple[float, float, bool]:
+    """Convenience wrapper of :class:`ContactProbe` for one state."""
+    return ContactProbe(scene, body_specs(scene)).measure(state, mode)

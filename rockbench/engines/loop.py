@@ -1,0 +1,435 @@
+"""The shared engine run: stepping (:func:`step_run`) and the turning of sampled body states
+into a :class:`~rockbench.result.Result` (:func:`finish`).
+
+:func:`finish` knows nothing of stepping: a batched backend (many cases of one scene in one
+engine call) that produces body states on the output grid calls it once per case and gets the
+same Result, events, contact diagnostics and divergence verdicts as a stepped run.
+
+What a run does, once for every engine (``docs/architecture.md``):
+
+* time: :func:`~rockbench.engines.base.run_window`; steps of ``dt`` with gravity
+  ``(-u_g''(t + dt/2), -g)``; output samples on :func:`~rockbench.result.output_grid`,
+  linearly interpolated between engine steps;
+* devices (frames with tendons/dampers, unless native): :class:`DeviceGeometry` point forces
+  from the poses before every step; fracture when a tendon's strain reaches eps_f, after which
+  no device force acts (native devices are removed by the adapter);
+* overturn: |phi| reaches the scene's fall angle (the run stops);
+* online divergence: a non-finite state, energy growth in free rocking (every step), contact
+  violations (probed every :data:`PROBE_CHUNK` samples), an exception from the engine;
+* :func:`finish`: contact diagnostics (:class:`ContactProbe`), events from the sampled motion
+  (:mod:`rockbench.measure`), post-run divergence checks, summary and cost.
+
+Units: SI and radians.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..analytic.reference import reference_of
+from ..constants import G
+from ..measure import excursions, measure_impacts
+from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
+                      output_grid)
+from ..scene.scene import Scene
+from ..scene.structure import Frame
+from .bodies import BodySpec
+from .contacts import ContactProbe
+from .devices import DAMPER_MODELS, DeviceGeometry, PointForce
+
+__all__ = ["Stepped", "step_run", "finish", "PROBE_CHUNK"]
+
+#: Output samples probed together (vectorized) for the penetration / sliding divergence check.
+PROBE_CHUNK = 500
+
+
+class Diverged(Exception):
+    """Raised inside a run when the engine state is unphysical; becomes status "diverged"."""
+
+
+@dataclass
+class Stepped:
+    """What stepping produced, on the output grid (the input of :func:`finish`).
+
+    grid : every output time of the run window [s] (the run may stop before its end);
+    states : (n, n_bodies, 6) body states (x, y, theta, vx, vy, omega) at ``grid[:n]``;
+    intact : (n,) devices intact at each sample;
+    native_report : per sample (tendon tensions [N], damper forces [N]) of native devices, or
+        None when the shared formulas apply;
+    events : overturn and fracture events found while stepping (dicts of EVENT_COLUMNS);
+    status, reason : "ok" or "diverged" and why (online checks, engine exceptions);
+    max_penetration, max_sliding : online contact maxima [m] before the structure falls;
+    steps, wall_s : engine steps and seconds spent inside the engine's step call.
+    """
+
+    grid: np.ndarray
+    states: np.ndarray
+    intact: np.ndarray
+    native_report: list | None = None
+    events: list[dict[str, Any]] = field(default_factory=list)
+    status: str = "ok"
+    reason: str | None = None
+    overturned: bool = False
+    t_overturn: float | None = None
+    fractured: bool = False
+    t_fracture: float | None = None
+    max_penetration: float = 0.0
+    max_sliding: float = 0.0
+    steps: int = 0
+    wall_s: float = 0.0
+
+
+def device_geometry(backend) -> DeviceGeometry | None:
+    """The shared device geometry of the backend's scene (None without devices), with the
+    damper model of the backend's settings (``damper``, default "couple")."""
+    scene = backend.scene
+    if not scene.has_devices:
+        return None
+    damper = getattr(backend.settings, "damper", "couple")
+    return DeviceGeometry(scene, backend.specs, damper if damper in DAMPER_MODELS else "couple")
+
+
+def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
+    """Step ``backend`` (an :class:`~rockbench.engines.base.EngineBackend` whose ``specs``,
+    ``foundation`` and ``poses0`` are set) from ``t0`` to ``t_end`` [s] under ``motion`` (None:
+    free rocking from ``phi0`` [rad]); never raises for an engine failure (status "diverged")."""
+    scene, cfg = backend.scene, backend.settings
+    specs = backend.specs
+    alpha = scene.alpha
+    fall = scene.fall_angles
+    acc = motion.acceleration if motion is not None else None
+    devices = device_geometry(backend)
+    native = bool(backend.native_devices)
+    intact = devices is not None
+    check_strain = devices is not None and devices.eps_f is not None
+    probe = ContactProbe(scene, specs)
+    uplift_phi = cfg.uplift_tol * alpha
+    crit = reference_of(scene).critical
+
+    dt = cfg.dt
+    grid = output_grid(t0, t_end, cfg.output_dt)
+    n_out = grid.size
+    n_steps = int(math.ceil((t_end - t0) / dt - 1e-9))
+    t_tol = 1e-9 * dt
+    samples: list[np.ndarray] = []     # body states on the output grid
+    sample_intact: list[bool] = []
+    native_report: list[tuple] = []
+    out = Stepped(grid=grid, states=np.zeros((0, len(specs), 6)), intact=np.zeros(0, bool))
+    checked = 0                        # samples already probed for penetration / sliding
+    energy0 = None
+    free = motion is None and devices is None
+    prev_t, prev = None, None
+    backend.steps = 0
+    backend.wall_s = 0.0
+    try:
+        backend._build()
+        state = np.array(backend._state(), dtype=float)
+        t = t0
+        for k in range(n_steps + 1):
+            if not np.all(np.isfinite(state)):
+                raise Diverged(f"non-finite body state at t={t:.6g} s")
+            # output samples on the fixed grid (linear interpolation between steps)
+            while len(samples) < n_out and grid[len(samples)] <= t + t_tol:
+                if prev is None or t == prev_t:
+                    samples.append(state)
+                else:
+                    w = (grid[len(samples)] - prev_t) / (t - prev_t)
+                    samples.append(prev + w * (state - prev))
+                sample_intact.append(intact)
+                if native:
+                    native_report.append(
+                        backend._native_device_report(devices, samples[-1],
+                                                      devices.elongations(samples[-1]))
+                        if intact and devices is not None else ([0.0, 0.0], [0.0, 0.0]))
+            if len(samples) - checked >= PROBE_CHUNK:
+                out.max_penetration, out.max_sliding = _check_contacts(
+                    cfg, probe, samples, sample_intact, crit, checked, uplift_phi,
+                    out.max_penetration, out.max_sliding)
+                checked = len(samples)
+            phi = state[0, 2]
+            if abs(phi) >= fall[1 if phi > 0 else -1]:
+                out.overturned, out.t_overturn = True, t
+                out.events.append(dict(t=t, kind="overturn", phi=phi,
+                                       phidot_before=state[0, 5], phidot_after=state[0, 5],
+                                       direction=1 if phi > 0 else -1))
+                break
+            if free:
+                e = _mech_energy(specs, state)
+                if energy0 is None:
+                    energy0 = max(e, 1e-300)
+                elif e > energy0 * (1 + cfg.energy_gain_tol):
+                    raise Diverged(f"mechanical energy grew by {100 * (e / energy0 - 1):.2f} % "
+                                   f"without input (t={t:.4g} s)")
+            if k == n_steps:
+                break
+            forces: list[PointForce] = []
+            if intact:
+                if native:
+                    el = devices.elongations(state) if check_strain else None
+                else:                      # the forces, and the elongations with them
+                    forces = devices.forces(state)[0]
+                    el = devices.last_elongations
+                if check_strain and max(el) / devices.l >= devices.eps_f:
+                    forces = []
+                    intact = False
+                    out.fractured, out.t_fracture = True, t
+                    out.events.append(dict(t=t, kind="fracture", phi=phi,
+                                           phidot_before=state[0, 5],
+                                           phidot_after=state[0, 5],
+                                           direction=1 if phi > 0 else -1))
+                    if native:
+                        backend._remove_devices()
+            g_x = -float(acc(t + 0.5 * dt)) if acc is not None else 0.0
+            ts = time.perf_counter()
+            backend._step(g_x, forces)
+            backend.wall_s += time.perf_counter() - ts
+            backend.steps += 1
+            prev_t, prev = t, state
+            t = t0 + (k + 1) * dt
+            state = np.array(backend._state(), dtype=float)
+        out.max_penetration, out.max_sliding = _check_contacts(
+            cfg, probe, samples, sample_intact, crit, checked, uplift_phi, out.max_penetration,
+            out.max_sliding)
+    except Diverged as e:
+        out.status, out.reason = "diverged", str(e)
+    except Exception as e:  # engine failure at the adapter boundary
+        out.status, out.reason = "diverged", f"{type(e).__name__}: {e}"
+    finally:
+        try:
+            backend._close()
+        except Exception:
+            pass
+    out.states = np.array(samples, dtype=float).reshape(len(samples), len(specs), 6)
+    out.intact = np.array(sample_intact, dtype=bool)
+    out.native_report = native_report if native else None
+    out.steps, out.wall_s = backend.steps, backend.wall_s
+    return out
+
+
+def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepped, *,
+           phi0: float, t0: float, backend_name: str, engine_version: str,
+           devices: DeviceGeometry | None) -> Result:
+    """The Result of an engine run from its samples on the output grid (see :class:`Stepped`):
+    history with contact diagnostics, events (uplift, impacts with the effective eta, fracture,
+    overturn), post-run divergence checks (penetration, sliding, energy gained between peaks
+    after the ground motion), summary and cost. ``settings`` is the backend's Settings
+    (``uplift_tol``, ``max_penetration``, ``max_sliding``, ``energy_gain_tol``)."""
+    cfg = settings
+    alpha = scene.alpha
+    ref = reference_of(scene)
+    crit = ref.critical
+    uplift_phi = cfg.uplift_tol * alpha
+    S = stepped.states
+    n = S.shape[0]
+    tt = stepped.grid[:n]
+    ph = S[:, 0, 2]
+    pd_ = S[:, 0, 5]
+    intact = stepped.intact
+    status, reason = stepped.status, stepped.reason
+    overturned, t_over = stepped.overturned, stepped.t_overturn
+    modes = np.where(np.abs(ph) <= uplift_phi, 0, np.sign(ph)).astype(np.int64)
+    probe = ContactProbe(scene, specs)
+    pen, sl, op = probe.measure_many(S, modes)
+    falling = _falling(ph, intact, crit)
+    # contact violations while the structure is past its critical angle do not make a run
+    # diverged if it goes on to overturn (an engine's falling bodies may slide or sink: the
+    # verdict is what matters); before that, or if it never overturns, they do
+    pen_pre = float(pen[~falling].max(initial=0.0))
+    sl_pre = float(sl[~falling].max(initial=0.0))
+    pen_all = float(pen.max(initial=0.0))
+    sl_all = float(sl.max(initial=0.0))
+    max_pen = max(stepped.max_penetration, pen_pre if overturned else pen_all)
+    max_slide = max(stepped.max_sliding, sl_pre if overturned else sl_all)
+    opened = bool(op.any())
+    history = _history(scene, motion, tt, S, modes, intact, devices, stepped.native_report,
+                       pen, sl)
+    ev = list(stepped.events)
+    # events from the sampled motion
+    free = motion is None and devices is None
+    rest_rate = cfg.uplift_tol * alpha * scene.p
+    exc = excursions(tt, ph, pd_, uplift_tol=uplift_phi, rest_rate=rest_rate)
+    for x in exc:
+        if not x.after_impact and not (x.i0 == 0 and phi0 != 0.0):
+            # back from the first uplifted sample to the last one still at rest in rate
+            j = x.i0
+            while j > 0 and abs(pd_[j]) > rest_rate and abs(ph[j - 1]) <= abs(ph[j]):
+                j -= 1
+            ev.append(dict(t=float(tt[j]), kind="uplift", phi=float(ph[j]),
+                           phidot_before=float(pd_[j]), phidot_after=float(pd_[j]),
+                           direction=x.sign))
+    energy = inertia0 = None
+    dyn = ref.dyn if len(exc) else None
+    if free and dyn is not None:
+        energy = lambda p: dyn[1 if p > 0 else -1].energy(p, 0.0)  # noqa: E731
+        inertia0 = lambda s: dyn[s].terms(0.0).inertia  # noqa: E731
+    imp = measure_impacts(tt, ph, pd_, alpha=alpha, free=free, energy=energy,
+                          inertia0=inertia0, uplift_tol=uplift_phi, rest_rate=rest_rate)
+    if overturned:
+        imp = [r for r in imp if r["t"] <= t_over]
+    ev.extend(imp)
+    if status == "ok":
+        if max_pen > cfg.max_penetration:
+            status, reason = "diverged", (f"penetration {max_pen:.3g} m > max_penetration "
+                                          f"{cfg.max_penetration:g} m")
+        elif max_slide > cfg.max_sliding:
+            status, reason = "diverged", (f"sliding {max_slide:.3g} m > max_sliding "
+                                          f"{cfg.max_sliding:g} m")
+        else:
+            quiet = t0 if motion is None else float(motion.t_end)
+            reason = _peak_energy_growth(exc, tt, ph, history["devices_intact"].to_numpy(),
+                                         dyn, quiet, cfg.energy_gain_tol, alpha)
+            if reason is not None:
+                status = "diverged"
+    events = events_frame(sorted(ev, key=lambda r: r["t"]))
+    impacts = events[events["kind"] == "impact"]
+    max_abs = float(np.max(np.abs(ph))) if ph.size else 0.0
+    ups = events[events["kind"] == "uplift"]
+    uplifted = bool(len(ups)) or (phi0 != 0.0 and len(history) > 0)
+    t_up = float(ups["t"].iloc[0]) if len(ups) else (t0 if uplifted else None)
+    summary = Summary(
+        max_abs_phi=max_abs, max_abs_phi_over_alpha=max_abs / alpha,
+        overturned=overturned, t_overturn=t_over,
+        exceeded_critical=overturned or _exceeded(ph, crit, history),
+        uplifted=uplifted, t_uplift=t_up,
+        n_impacts=int(len(impacts)), fractured=stepped.fractured,
+        t_fracture=stepped.t_fracture, status=status, reason=reason,
+        eta_measured=[float(x) for x in impacts["eta"].to_numpy()],
+        max_penetration=max(max_pen, pen_all), max_sliding=max(max_slide, sl_all),
+        contact_opened=opened)
+    sim_time = (float(tt[-1]) - t0) if tt.size else 0.0
+    cost = Cost(wall_s=stepped.wall_s, sim_time=sim_time, steps=stepped.steps)
+    out_settings = asdict(cfg)
+    out_settings["engine_version"] = engine_version
+    return Result(backend=backend_name, scene=scene,
+                  motion=motion.describe() if motion is not None else {"kind": "none"},
+                  history=history, events=events, summary=summary, cost=cost,
+                  settings=out_settings)
+
+
+# ------------------------------------------------------------------------------------------
+def _check_contacts(cfg, probe: ContactProbe, samples: list, intact: list, crit: dict,
+                    start: int, uplift_phi: float, max_pen: float, max_slide: float
+                    ) -> tuple[float, float]:
+    """Probe samples[start:] (vectorized); raise Diverged beyond the tolerances. Samples past
+    the critical angle (falling) are held to 10 x the tolerances only: whether their violations
+    count is decided at the end of the run (they do unless it overturns)."""
+    if len(samples) > start:
+        S = np.array(samples[start:], dtype=float)
+        ph = S[:, 0, 2]
+        modes = np.where(np.abs(ph) <= uplift_phi, 0, np.sign(ph))
+        pen, sl, _ = probe.measure_many(S, modes)
+        falling = _falling(ph, np.array(intact[start:len(samples)], bool), crit)
+        max_pen = max(max_pen, float(pen[~falling].max(initial=0.0)))
+        max_slide = max(max_slide, float(sl[~falling].max(initial=0.0)))
+        fpen = float(pen[falling].max(initial=0.0))
+        fsl = float(sl[falling].max(initial=0.0))
+        if fpen > 10 * cfg.max_penetration or fsl > 10 * cfg.max_sliding:
+            raise Diverged(f"while falling: penetration {fpen:.3g} m, sliding {fsl:.3g} m "
+                           f"> 10 x max_penetration / max_sliding")
+    if max_pen > cfg.max_penetration:
+        raise Diverged(f"penetration {max_pen:.3g} m > max_penetration "
+                       f"{cfg.max_penetration:g} m")
+    if max_slide > cfg.max_sliding:
+        raise Diverged(f"sliding {max_slide:.3g} m > max_sliding {cfg.max_sliding:g} m")
+    return max_pen, max_slide
+
+
+def _history(scene: Scene, motion, t: np.ndarray, S: np.ndarray, modes: np.ndarray,
+             intact: np.ndarray, devices: DeviceGeometry | None, native_report: list | None,
+             pen: np.ndarray, sl: np.ndarray) -> pd.DataFrame:
+    """The history frame (HISTORY_COLUMNS + CONTACT_COLUMNS) from the sampled states."""
+    n = t.size
+    frame = isinstance(scene.structure, Frame)
+    nan = np.full(n, np.nan)
+    zero = np.zeros(n)
+    acc = (np.asarray(motion.acceleration(t), dtype=float).reshape(n)
+           if motion is not None and n else zero.copy())
+    cols: dict[str, Any] = {
+        "t": t, "phi": S[:, 0, 2].copy(), "phidot": S[:, 0, 5].copy(), "ground_acc": acc,
+        "theta_beam": S[:, 1, 2].copy() if frame else nan,
+        "theta_right": S[:, 2, 2].copy() if frame else nan,
+        "mode": modes.astype(np.int64), "devices_intact": intact.astype(bool)}
+    el = ten = dmp = np.zeros((n, 2))
+    if devices is not None and n:
+        el, ten, dmp = devices.history(S)
+        if native_report:
+            ten = np.array([r[0] for r in native_report], dtype=float).reshape(n, 2)
+            dmp = np.array([r[1] for r in native_report], dtype=float).reshape(n, 2)
+        on = intact[:, None]
+        el, ten, dmp = (np.where(on, a, 0.0) for a in (el, ten, dmp))
+    for j, side in enumerate(("left", "right")):
+        cols[f"tendon_elong_{side}"] = el[:, j].copy()
+        cols[f"tendon_force_{side}"] = ten[:, j].copy()
+        cols[f"damper_force_{side}"] = dmp[:, j].copy()
+    cols["penetration"] = pen
+    cols["sliding"] = sl
+    df = pd.DataFrame(cols, columns=list(HISTORY_COLUMNS) + list(CONTACT_COLUMNS))
+    for c in df.columns:
+        if c not in ("mode", "devices_intact"):
+            df[c] = df[c].astype(np.float64)
+    return df
+
+
+def _peak_energy_growth(exc: list, t: np.ndarray, phi: np.ndarray, intact: np.ndarray, dyn,
+                        t_quiet: float, tol: float, alpha: float) -> str | None:
+    """Reason string if the energy of an excursion (its potential at its peak: gravity and
+    intact tendons) exceeds that of the previous one by more than ``tol`` (relative) plus
+    ``tol`` times the potential at |phi| = alpha / 20, for excursions after the ground motion
+    ended (``t_quiet`` [s]); None otherwise. Impacts and dampers only remove energy."""
+    if dyn is None or len(exc) < 2:
+        return None
+    floor = tol * min(dyn[s].energy(s * 0.05 * alpha, 0.0, True) for s in (1, -1))
+    prev = None
+    for x in exc:
+        if not x.complete or t[x.i0] < t_quiet:
+            prev = None
+            continue
+        V = dyn[x.sign].energy(x.sign * x.peak, 0.0, bool(intact[x.ipk]))
+        if prev is not None and x.after_impact and V > prev[0] * (1 + tol) + floor:
+            return (f"mechanical energy grew without input: peak {x.sign * x.peak:.4g} rad at "
+                    f"t={t[x.ipk]:.4g} s holds {V:.4g} J, the previous peak (t={prev[1]:.4g} s) "
+                    f"{prev[0]:.4g} J")
+        prev = (V, float(t[x.ipk]))
+    return None
+
+
+def _mech_energy(specs: list[BodySpec], state: np.ndarray) -> float:
+    """Kinetic + gravitational energy [J] of the bodies, relative to the rest configuration."""
+    e = 0.0
+    for sp, st in zip(specs, state):
+        e += 0.5 * sp.mass * (st[3] ** 2 + st[4] ** 2) + 0.5 * sp.inertia * st[5] ** 2
+        e += sp.mass * G * (st[1] - sp.y)
+    return e
+
+
+def _falling(phi: np.ndarray, intact: np.ndarray, crit: dict) -> np.ndarray:
+    """Mask of samples past the critical angle of their direction and device state."""
+    out = np.zeros(phi.shape, dtype=bool)
+    for s in (1, -1):
+        for flag in (True, False):
+            c = crit[(s, flag)]
+            if math.isfinite(c):
+                out |= (s * phi > c) & (intact == flag)
+    return out
+
+
+def _exceeded(phis: np.ndarray, crit: dict, history: pd.DataFrame) -> bool:
+    """Whether |phi| exceeded the critical angle of its direction and device state."""
+    if not len(history):
+        return False
+    intact = history["devices_intact"].to_numpy()
+    for s in (1, -1):
+        for flag in (True, False):
+            c = crit[(s, flag)]
+            if not math.isfinite(c):
+                continue
+            m = intact == flag
+            if np.any(s * phis[m] > c):
+                return True
+    return False
