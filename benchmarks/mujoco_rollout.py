@@ -8,7 +8,8 @@ checks that the two give the same motion and times them, for a scene without dev
 devices the per-step work of the shared loop -- fracture, damper coefficients -- needs Python
 between steps, so rollout could only run between such events).
 
-Usage: ``python benchmarks/mujoco_rollout.py [SCENE] [A] [W]`` (default paper-asymmetric 6 6).
+Usage: ``python benchmarks/mujoco_rollout.py [SCENE] [A] [W]`` (default: ``[benchmarks] rollout``
+of rockbench's case catalogue, paper-asymmetric 6 6).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import numpy as np
 
 import rockbench as rb
 from rockbench.engines.mujoco import MujocoBackend
+from rockbench.sweep.cases import catalogue
 
 
 def main(argv=None):
@@ -27,12 +29,13 @@ def main(argv=None):
     from mujoco import rollout
 
     argv = sys.argv[1:] if argv is None else argv
-    name = argv[0] if argv else "paper-asymmetric"
-    A = float(argv[1]) if len(argv) > 1 else 6.0
-    W = float(argv[2]) if len(argv) > 2 else 6.0
+    default = catalogue().benchmarks["rollout"]
+    name = argv[0] if argv else default["scene"]
+    A = float(argv[1]) if len(argv) > 1 else float(default["A"])
+    W = float(argv[2]) if len(argv) > 2 else float(default["W"])
     sc = rb.load_scene(name)
     pulse = rb.RickerPulse.dimensionless(A, W, sc.structure, "symmetric", 1)
-    duration = pulse.t_end - pulse.t_start + 5.0
+    duration = pulse.t_end - pulse.t_start + float(default["tail"])
 
     # 1. the backend (shared loop, gravity set every step)
     t = time.perf_counter()

@@ -23,6 +23,8 @@ import pandas as pd
 
 import rockbench as rb
 from rockbench.compare import metrics
+from rockbench.scene.motion import motion_from_spec
+from rockbench.sweep.cases import catalogue
 
 
 def _cpu() -> str:
@@ -44,18 +46,15 @@ def machine() -> dict:
 
 
 def cases(quick: bool):
-    asym = rb.load_scene("paper-asymmetric")
-    hyb = rb.load_scene("paper-asymmetric-hybrid-eps1")
-    block = rb.load_scene("housner-block")
-    out = [
-        ("block free rocking 0.5a, 10 s", block, None, 0.5 * block.alpha, 10.0),
-        ("asym frame free rocking 0.5a, 10 s", asym, None, 0.5 * asym.alpha, 10.0),
-        ("asym frame, sym. Ricker A=2 W=3", asym,
-         rb.RickerPulse.dimensionless(2.0, 3.0, asym.structure, "symmetric", 1), 0.0, None),
-        ("asym hybrid eps1, antisym. Ricker A=4 W=3", hyb,
-         rb.RickerPulse.dimensionless(4.0, 3.0, hyb.structure, "antisymmetric", -1), 0.0, None),
-    ]
-    return out[:2] if quick else out
+    """(label, scene, motion, phi0 [rad], duration [s]) of the benchmark cases (rockbench's
+    case catalogue, ``[benchmarks]`` of ``rockbench/scenarios/cases.toml``)."""
+    b = catalogue().benchmarks
+    out = []
+    for c in b["cases"]:
+        scene = rb.load_scene(c["scene"])
+        out.append((c["label"], scene, motion_from_spec(c.get("motion"), scene.structure),
+                    c.get("phi0", 0.0) * scene.alpha, c.get("duration")))
+    return out[:b["quick"]] if quick else out
 
 
 def timed(scene, motion, engine, phi0, duration, repeat, **settings):
@@ -95,12 +94,12 @@ def main(argv=None) -> int:
     # accuracy vs cost: dt sweep on the pulse case
     sweep = []
     if not args.quick:
-        label, scene, motion, phi0, duration = cases(False)[2]
+        label, scene, motion, phi0, duration = cases(False)[catalogue().benchmarks["dt_case"]]
         ref, _ = timed(scene, motion, "analytic", phi0, duration, 1)
         for eng in engines:
             if eng == "analytic":
                 continue
-            for dt in (2e-3, 1e-3, 5e-4, 2e-4):
+            for dt in catalogue().benchmarks["dt_sweep"]:
                 try:
                     r, total = timed(scene, motion, eng, phi0, duration, 1, dt=dt,
                                      output_dt=max(dt, 1e-3))

@@ -26,7 +26,6 @@ Any other exception is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import os
@@ -36,39 +35,13 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from .cli_input import backend_overrides, compare_settings, load_scene_from, motion_from
 from .constants import G
-from .errors import ParameterError, RecordError, RockbenchError
+from .errors import ParameterError, RockbenchError
 
 __all__ = ["build_parser", "main"]
 
 PROG = "rockbench"
-
-#: Units and meaning of the keys of ``rockbench info`` (Reference.constants()).
-INFO_KEYS: dict[str, tuple[str, str]] = {
-    "alpha": ("rad", "slenderness of the taller column, atan(b/H)"),
-    "p": ("rad/s", "frequency parameter of the taller column, sqrt(3g/(4R))"),
-    "eta_ccw": ("-", "restitution of an impact after which it rocks counterclockwise"),
-    "eta_cw": ("-", "restitution of an impact after which it rocks clockwise"),
-    "lambda_ccw": ("g", "ground acceleration that uplifts counterclockwise (signed)"),
-    "lambda_cw": ("g", "ground acceleration that uplifts clockwise (signed)"),
-    "phi_cr_ccw": ("rad", "critical angle, counterclockwise"),
-    "phi_cr_cw": ("rad", "critical angle, clockwise"),
-    "phi_fall_ccw": ("rad", "fall angle (overturned), counterclockwise"),
-    "phi_fall_cw": ("rad", "fall angle (overturned), clockwise"),
-    "phi_cr_ccw_fractured": ("rad", "critical angle after tendon fracture, counterclockwise"),
-    "phi_cr_cw_fractured": ("rad", "critical angle after tendon fracture, clockwise"),
-    "phi_fracture_ccw": ("rad", "rotation at which a tendon fractures, counterclockwise"),
-    "phi_fracture_cw": ("rad", "rotation at which a tendon fractures, clockwise"),
-    "mass": ("kg", "mass of the block"),
-    "mass_left": ("kg", "mass of the left (taller) column"),
-    "mass_right": ("kg", "mass of the right column"),
-    "mass_beam": ("kg", "mass of the beam"),
-    "alpha_right": ("rad", "slenderness of the right column"),
-    "r_BC_ccw": ("m", "beam centre of mass from the pivot, counterclockwise"),
-    "psi_BC_ccw": ("rad", "angle of r_BC, counterclockwise"),
-    "r_BC_cw": ("m", "beam centre of mass from the pivot, clockwise"),
-    "psi_BC_cw": ("rad", "angle of r_BC, clockwise"),
-}
 
 #: Summary rows of ``rockbench compare`` (the full table goes to --csv / --json).
 COMPARE_COLUMNS = ("backend", "status", "max_abs_phi_over_alpha", "peak_rel_error", "nrmse",
@@ -81,15 +54,6 @@ COMPARE_COLUMNS = ("backend", "status", "max_abs_phi_over_alpha", "peak_rel_erro
 # ==============================================================================================
 class CommandLineError(Exception):
     """An argument the parser rejects (printed as one line, exit code 2)."""
-
-
-class MissingOption(ParameterError):
-    """A required option is missing (a :class:`ParameterError` with a plainer message)."""
-
-    def __init__(self, name: str, valid: str, detail: str = ""):
-        self.name, self.value, self.valid = name, None, valid
-        RockbenchError.__init__(self, f"{name} is required{' ' + detail if detail else ''}: "
-                                f"{valid}")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -306,155 +270,19 @@ def _table(rows: list[list[str]], header: list[str]) -> str:
     return "\n".join(lines)
 
 
-def _scene_overrides(pairs: list[tuple[str, str]]) -> dict[str, Any]:
-    """``--set`` pairs as load_scene overrides; a value that is not a number, ``none`` or a
-    structure type is rejected here, naming its key."""
-    out: dict[str, Any] = {}
-    for key, raw in pairs:
-        try:
-            out[key] = float(raw)
-        except ValueError:
-            if raw.lower() not in ("none", "null", "block", "frame"):
-                raise ParameterError(f"--set {key}", raw, "a number or 'none'") from None
-            out[key] = raw
-    return out
+def _describemotion_from(motion, phi0: float, alpha: float) -> str:
+    """The motion's one long label (:func:`rockbench.result.motion_label`), with the initial
+    rotation of free rocking and the size of a record."""
+    from .result import motion_label
 
-
-def _load_scene(args: argparse.Namespace):
-    from .scene import load_scene
-
-    return load_scene(args.scene, _scene_overrides(args.overrides))
-
-
-def _setting_value(cls: type, name: str, raw: str) -> Any:
-    """Parse ``raw`` as the type of the Settings field ``name`` (from its default value)."""
-    fields = {f.name: f for f in dataclasses.fields(cls)}
-    if name not in fields:
-        raise ParameterError(f"--setting {name}", raw,
-                             f"a field of {cls.__qualname__}: {', '.join(fields)}")
-    f = fields[name]
-    default = f.default if f.default is not dataclasses.MISSING else None
-    low = raw.lower()
-    try:
-        if isinstance(default, bool):
-            if low in ("true", "yes", "1", "on"):
-                return True
-            if low in ("false", "no", "0", "off"):
-                return False
-            raise ValueError
-        if isinstance(default, int):
-            return int(raw)
-        if isinstance(default, float):
-            return float(raw)
-        if isinstance(default, str):
-            return raw
-        if low in ("none", "null"):
-            return None
-        try:
-            return float(raw)
-        except ValueError:
-            return raw
-    except ValueError:
-        kind = type(default).__name__
-        raise ParameterError(f"--setting {name}", raw, f"a value of type {kind}") from None
-
-
-def _backend_overrides(engine: str, args: argparse.Namespace) -> dict[str, Any]:
-    """Settings overrides for ``engine`` from --dt and --setting (validated by its Settings)."""
-    from .engines import get_backend
-
-    cls = get_backend(engine).Settings
-    names = {f.name for f in dataclasses.fields(cls)}
-    out: dict[str, Any] = {}
-    for name, raw in args.settings:
-        out[name] = _setting_value(cls, name, raw)
-    if args.dt is not None:
-        if "dt" not in names:
-            raise ParameterError("--dt", args.dt, f"omitted for the {engine} backend",
-                                 f"{engine} has no time step; its settings are "
-                                 f"{', '.join(sorted(names))}")
-        if "dt" in out:
-            raise ParameterError("--dt", args.dt, "omitted when --setting dt=... is given")
-        out["dt"] = args.dt
-    if "dt" in out and "output_dt" in names and "output_dt" not in out:
-        # keep the default output grid unless the step is coarser than it
-        default_out = next(f.default for f in dataclasses.fields(cls) if f.name == "output_dt")
-        if isinstance(out["dt"], (int, float)) and out["dt"] > default_out:
-            out["output_dt"] = out["dt"]
-    cls(**out)  # validate now: errors name the field
-    return out
-
-
-def _motion(args: argparse.Namespace, scene) -> tuple[Any, float]:
-    """(ground motion or None, phi0 [rad]) from the motion options."""
-    pulse_opts = {"--sign": args.sign, "--amplitude": args.amplitude,
-                  "--frequency": args.frequency}
-    record_opts = {"--record-dt": args.record_dt, "--record-units": args.record_units,
-                   "--scale": args.scale}
-    if args.pulse is None:
-        for opt, v in pulse_opts.items():
-            if v is not None:
-                raise ParameterError(opt, v, "given only with --pulse")
-    if args.record is None:
-        for opt, v in record_opts.items():
-            if v is not None:
-                raise ParameterError(opt, v, "given only with --record")
-
-    if args.pulse is not None:
-        from .scene import RickerPulse
-
-        for opt, what in (("--amplitude", "A = a_g / (g tan alpha) > 0"),
-                          ("--frequency", "W = omega_g / p > 0")):
-            if pulse_opts[opt] is None:
-                raise MissingOption(opt, what, "with --pulse")
-        pulse = RickerPulse.dimensionless(args.amplitude, args.frequency, scene.structure,
-                                          args.pulse, 1 if args.sign is None else args.sign)
-        return pulse, 0.0
-
-    if args.record is not None:
-        from .scene import load_record
-
-        path = Path(args.record)
-        if not path.is_file():
-            raise RecordError(f"--record: file {str(path)!r} does not exist")
-        if path.suffix.lower() != ".at2":
-            if args.record_dt is None:
-                raise MissingOption("--record-dt", "the time step [s] > 0",
-                                    f"for the headerless record file {path.name}")
-            if args.record_units is None:
-                raise MissingOption("--record-units", "one of g, m/s2, cm/s2",
-                                    f"for the headerless record file {path.name}")
-        return load_record(path, dt=args.record_dt, units=args.record_units,
-                           scale=1.0 if args.scale is None else args.scale), 0.0
-
-    if args.phi0 is not None:
-        fall = min(scene.fall_angles.values())
-        limit = fall / scene.alpha
-        if abs(args.phi0) >= limit:
-            raise ParameterError("--phi0", args.phi0,
-                                 f"0 < |phi0| < {limit:.4g} (multiples of alpha; fall angle "
-                                 f"{fall:.4g} rad)")
-        return None, args.phi0 * scene.alpha
-
-    raise MissingOption("a ground motion", "--pulse, --record, or --phi0 for free rocking",
-                        "(nothing would move)")
-
-
-def _describe_motion(motion, phi0: float, alpha: float) -> str:
     if motion is None:
         return f"free rocking from phi0 = {phi0 / alpha:.4g} alpha = {phi0:.6g} rad"
     d = motion.describe()
-    if d.get("kind") == "ricker":
-        text = (f"{d['shape']} Ricker pulse, sign {d['sign']:+d}: a_g = {d['amplitude_m_s2']:.4g}"
-                f" m/s^2, T_g = {d['period_s']:.4g} s (omega_g = {d['omega_rad_s']:.4g} rad/s)")
-        if "A" in d:
-            text += f", A = {d['A']:g}, W = {d['W']:g}"
-        return text
+    text = motion_label(d, long=True)
     if d.get("kind") == "record":
-        return (f"record {d['name']}: {d['npts']} samples, dt = {d['dt_s']:g} s, "
-                f"PGA = {d['pga_m_s2']:.4g} m/s^2 ({d['pga_m_s2'] / G:.3g} g), "
-                f"scale {d['scale']:g}")
-    return str(d)
+        text += (f": {d['npts']} samples, dt = {d['dt_s']:g} s, PGA = {d['pga_m_s2']:.4g} m/s^2 "
+                 f"({d['pga_m_s2'] / G:.3g} g)")
+    return text
 
 
 def _events_path(out: Path) -> Path:
@@ -478,10 +306,11 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from . import info
+    from . import runner
+    from .analytic.reference import CONSTANTS
 
-    scene = _load_scene(args)
-    consts = info(scene)
+    scene = load_scene_from(args)
+    consts = runner.info(scene)
     if args.json:
         _print_json(consts)
         return 0
@@ -492,7 +321,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     for key, value in consts.items():
         if key in ("scene", "type"):
             continue
-        unit, meaning = INFO_KEYS.get(key, ("", ""))
+        unit, meaning = CONSTANTS.get(key, ("", ""))
         if unit == "rad" and key != "alpha" and isinstance(value, float):
             meaning += f" (= {value / alpha:.4g} alpha)"
         rows.append([key, _fmt(value), unit, meaning])
@@ -501,12 +330,12 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from . import run
+    from . import runner
 
-    scene = _load_scene(args)
-    overrides = _backend_overrides(args.engine, args)
-    motion, phi0 = _motion(args, scene)
-    result = run(scene, motion, engine=args.engine, duration=args.duration, phi0=phi0,
+    scene = load_scene_from(args)
+    overrides = backend_overrides(args.engine, args)
+    motion, phi0 = motion_from(args, scene)
+    result = runner.run(scene, motion, engine=args.engine, duration=args.duration, phi0=phi0,
                  **overrides)
     files = {}
     if args.out:
@@ -526,7 +355,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         return 0
 
     s, c, alpha = result.summary, result.cost, scene.alpha
-    print(f"{scene.name}, engine {args.engine}: {_describe_motion(motion, phi0, alpha)}")
+    print(f"{scene.name}, engine {args.engine}: {_describemotion_from(motion, phi0, alpha)}")
     if s.status != "ok":
         print(f"status             {s.status}: {s.reason}")
     rows = [
@@ -583,75 +412,16 @@ def _package_version(dist: str) -> str | None:
         return None
 
 
-def _compare_settings(engines: list[str] | None, args: argparse.Namespace) -> dict | None:
-    """Per-backend settings overrides {backend: {field: value}} for compare.
-
-    ``--setting name=value`` goes to every compared backend whose Settings has the field,
-    ``--setting backend.name=value`` to that backend only; ``--dt`` to every engine with a time
-    step (the analytic reference has none). A setting no compared backend has is an error.
-    """
-    if not args.settings and args.dt is None:
-        return None
-    from .engines import REGISTRY, available_backends, get_backend
-
-    names = list(dict.fromkeys(["analytic", *(engines if engines is not None
-                                               else available_backends())]))
-    targeted: list[tuple[str, str, str]] = []   # (backend or "", field, raw)
-    for key, raw in args.settings:
-        head, dot, tail = key.partition(".")
-        if dot and head in REGISTRY:
-            if head not in names:
-                raise ParameterError(f"--setting {key}", raw,
-                                     f"for a compared backend: {', '.join(names)}")
-            targeted.append((head, tail, raw))
-        else:
-            targeted.append(("", key, raw))
-    out: dict[str, dict[str, Any]] = {}
-    used: set[int] = set()
-    dt_used = False
-    for engine in names:
-        fields = {f.name for f in dataclasses.fields(get_backend(engine).Settings)}
-        mine = []
-        for i, (target, name, raw) in enumerate(targeted):
-            if target == engine or (target == "" and name in fields):
-                mine.append((name, raw))
-                used.add(i)
-        dt = args.dt if "dt" in fields else None
-        dt_used |= dt is not None
-        over = _backend_overrides(engine, argparse.Namespace(settings=mine, dt=dt))
-        if over:
-            out[engine] = over
-    for i, (target, name, raw) in enumerate(targeted):
-        if i not in used:
-            raise ParameterError(f"--setting {name}", raw,
-                                 f"a settings field of one of {', '.join(names)}")
-    if args.dt is not None and not dt_used:
-        raise ParameterError("--dt", args.dt, "omitted: none of the compared backends has a "
-                             "time step")
-    return out
-
-
 def cmd_compare(args: argparse.Namespace) -> int:
-    try:
-        from .compare import compare
-    except ImportError as e:
-        raise RockbenchError(f"the compare command is unavailable: {e}") from None
+    from . import compare as compare_mod
+    from .runner import resolve_engines
 
-    write_case_report = None
-    if args.report:
-        try:
-            from .report import write_case_report
-        except ImportError as e:
-            raise RockbenchError(f"--report is unavailable: {e}") from None
-    scene = _load_scene(args)
+    scene = load_scene_from(args)
     if args.engines is not None:
-        from .engines import get_backend
-
-        for name in args.engines:
-            get_backend(name)  # unknown names fail here, naming the engine
-    motion, phi0 = _motion(args, scene)
-    settings = _compare_settings(args.engines, args)
-    comparison = compare(scene, motion, engines=args.engines, phi0=phi0,
+        resolve_engines(args.engines, name="--engines")  # unknown names fail here, by name
+    motion, phi0 = motion_from(args, scene)
+    settings = compare_settings(args.engines, args)
+    comparison = compare_mod.compare(scene, motion, engines=args.engines, phi0=phi0,
                          duration=args.duration, settings=settings,
                          progress=sys.stderr.isatty() and not args.json)
     table = comparison.table
@@ -660,7 +430,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
         csv_path = Path(args.csv)
         csv_path.parent.mkdir(parents=True, exist_ok=True)
         table.to_csv(csv_path, index=False)
-    if write_case_report is not None:
+    if args.report:
+        from .report import write_case_report
+
         report_path = write_case_report(comparison, args.report)
     if args.json:
         data = {"scene": scene.name, "motion": comparison.motion, "phi0": comparison.phi0,
@@ -672,7 +444,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
             data["report"] = str(report_path)
         _print_json(data)
         return 0
-    print(f"{scene.name}: {_describe_motion(motion, phi0, scene.alpha)}")
+    print(f"{scene.name}: {_describemotion_from(motion, phi0, scene.alpha)}")
     cols = [c for c in COMPARE_COLUMNS if c in table.columns]
     with _pandas_display():
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
@@ -696,14 +468,14 @@ def _print_constants(out: str | Path) -> None:
     ``out/constants.csv`` (the table ``rockbench info`` gives for one scene)."""
     import pandas as pd
 
-    from . import info
-    from .report.campaign import SCENES
+    from .analytic.reference import CONSTANTS
+    from .campaign import SCENES
+    from .runner import info
     from .scene import load_scene
 
-    cols = {"scene": "", "alpha": "rad", "p": "rad/s", "lambda_ccw": "g", "lambda_cw": "g",
-            "eta_ccw": "-", "eta_cw": "-", "phi_cr_ccw": "rad", "phi_cr_cw": "rad",
-            "phi_fall_ccw": "rad", "phi_fall_cw": "rad", "phi_fracture_ccw": "rad",
-            "phi_fracture_cw": "rad"}
+    keys = ("alpha", "p", "lambda_ccw", "lambda_cw", "eta_ccw", "eta_cw", "phi_cr_ccw",
+            "phi_cr_cw", "phi_fall_ccw", "phi_fall_cw", "phi_fracture_ccw", "phi_fracture_cw")
+    cols = {"scene": "", **{k: CONSTANTS[k][0] for k in keys}}
     rows = [info(load_scene(name)) for name in SCENES]
     table = pd.DataFrame(rows).reindex(columns=list(cols))
     print("Analytic constants of the campaign's scenes (critical angle: none = no zero of "
@@ -716,18 +488,13 @@ def _print_constants(out: str | Path) -> None:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    try:
-        from .report import run_campaign
-    except ImportError as e:
-        raise RockbenchError(f"the report command is unavailable: {e}") from None
+    from . import campaign
+    from .runner import resolve_engines
 
     if args.records is not None and not Path(args.records).is_dir():
         raise ParameterError("--records", args.records, "an existing folder of record files")
     if args.engines is not None:
-        from .engines import get_backend
-
-        for name in args.engines:
-            get_backend(name)
+        resolve_engines(args.engines, name="--engines")
     kwargs: dict[str, Any] = {"engines": args.engines, "records_dir": args.records,
                               "quick": args.quick, "store": args.store}
     if args.dask is not None:
@@ -735,7 +502,7 @@ def cmd_report(args: argparse.Namespace) -> int:
     if args.workers is not None:
         kwargs["workers"] = args.workers
     _print_constants(args.out)
-    path = run_campaign(args.out, **kwargs)
+    path = campaign.run_campaign(args.out, **kwargs)
     print(f"report: {path}")
     return 0
 

@@ -17,8 +17,14 @@ How the metrics are measured (``docs/metrics.md`` lists every column with its un
 * a run that did not finish cleanly (status ``diverged`` or ``invalid``) keeps its row, with its
   reason and its cost, but NaN physics metrics, so that it is never plotted as physics.
 
-This module runs backends only through the registry (:mod:`rockbench.engines`); it never imports
-an engine.
+The module also holds what every layer above measures with: :data:`TOLERANCES` (the one
+tolerance table: the report's agreement grades, ``assert_agree``'s defaults, ``check_backend``'s
+free-rocking bars and the cross-engine bars), the derived metrics of a table
+(:func:`with_derived`) and the overturning map of a sweep (:func:`overturn_map`).
+
+Importing it imports no engine, no scene and no runner: :func:`compare` runs backends through
+:func:`rockbench.runner.run_all`, imported when it is called, so that the report layer may import
+the column dictionaries, :data:`TOLERANCES` and :func:`with_derived` from here.
 """
 
 from __future__ import annotations
@@ -26,20 +32,88 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 import pandas as pd
 
-from .errors import BackendUnavailable, ParameterError
+from .errors import ParameterError
 from .result import Result
-from .scene.scene import Scene
 
-__all__ = ["REFERENCE", "METRIC_COLUMNS", "ETA_COLUMNS", "Comparison", "compare", "metrics",
-           "eta_rows"]
+if TYPE_CHECKING:  # pragma: no cover - annotations only
+    from .scene.scene import Scene
 
-#: Name of the reference backend every metric is measured against.
-REFERENCE = "analytic"
+__all__ = ["REFERENCE", "METRIC_COLUMNS", "ETA_COLUMNS", "DERIVED_COLUMNS", "TOLERANCES",
+           "TOLERANCE_KEYS", "Comparison", "compare", "metrics", "eta_rows", "history_error",
+           "with_derived", "overturn_map"]
+
+
+def __getattr__(name: str) -> Any:
+    # REFERENCE is runner's (the one place that names the reference backend); re-exported here
+    # lazily so that importing this module does not import the runner and the engine registry.
+    if name == "REFERENCE":
+        from .runner import REFERENCE
+
+        return REFERENCE
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+# =========================================================================================
+# The one tolerance table
+# =========================================================================================
+#: Every tolerance rockbench measures agreement with, in one place (values in the units of
+#: :data:`TOLERANCE_KEYS`). Entries:
+#:
+#: * ``"assert_agree"`` - the defaults of :func:`rockbench.testing.assert_agree` (free rocking
+#:   and moderate pulses at the engines' default time step, 1 ms);
+#: * ``"free_rocking"``, ``"surviving_pulse"``, ``"overturning_pulse"`` - the cross-engine bars
+#:   (``tests/engines/test_cross_engine.py``), each a set of ``assert_agree`` keyword arguments:
+#:   ``assert_agree(result, reference, **TOLERANCES["free_rocking"])``; a tolerance of None skips
+#:   that check;
+#: * ``"contacts"`` - the cross-engine bar on contact penetration and sliding (engines);
+#: * ``"check_backend"`` - the free-rocking checks of :func:`rockbench.testing.check_backend`
+#:   (Housner's block from phi0 = +-alpha/2, dt = 1 ms): ``eta_rtol`` against Housner's
+#:   1 - 1.5 sin^2(alpha), ``nrmse`` against the analytic history over 1 s;
+#: * ``"grades"`` - the report's agreement colours: metric -> (good, fair) limits on the
+#:   metric's absolute value, |x| <= good is "good" (green), <= fair "fair" (amber), larger
+#:   "poor" (red); units those of the metric (:data:`METRIC_COLUMNS`, :data:`DERIVED_COLUMNS`),
+#:   documented in ``docs/report.md``. The "good" limits of peak and eta equal assert_agree's
+#:   defaults; nrmse is tightened there (a whole-run history that drifts in phase by a few
+#:   percent of a rocking cycle already gives 0.01-0.05, hence the wider "good" here).
+#:
+#: pymunk, MuJoCo and PyBullet measure the free-rocking eta within 0.1-0.3 % at dt = 1 ms
+#: (``docs/testing.md``), hence 0.5 %.
+TOLERANCES: dict[str, dict[str, Any]] = {
+    "assert_agree": dict(peak_rtol=0.03, eta_rtol=0.005, nrmse=0.005, verdict=True),
+    "free_rocking": dict(peak_rtol=None, eta_rtol=0.005, nrmse=0.005, verdict=True),
+    "surviving_pulse": dict(peak_rtol=0.03, eta_rtol=None, nrmse=None, verdict=True),
+    "overturning_pulse": dict(peak_rtol=None, eta_rtol=None, nrmse=None, verdict=True),
+    "contacts": dict(max_penetration=2e-3, max_sliding=2e-3),
+    "check_backend": dict(eta_rtol=0.005, nrmse=0.05),
+    "grades": {
+        "nrmse": (0.01, 0.05),
+        "max_abs_error_over_alpha": (0.05, 0.2),
+        "peak_rel_error": (0.03, 0.10),
+        "eta_mean_rel_error": (0.005, 0.02),
+        "eta_max_rel_error": (0.005, 0.02),
+        "t_first_impact_error": (0.01, 0.05),
+        "max_penetration": (1e-3, 5e-3),
+        "max_sliding": (1e-3, 1e-2),
+    },
+}
+
+#: Unit and meaning of every key of the :data:`TOLERANCES` entries (the ``"grades"`` entry is
+#: keyed by metric: see :data:`METRIC_COLUMNS`).
+TOLERANCE_KEYS: dict[str, str] = {
+    "peak_rtol": "-, bound on |max|phi| / max|phi_ref| - 1| (reference at rest: on "
+                 "max|phi| / alpha); None skips the check",
+    "eta_rtol": "-, bound on |eta / eta_ref - 1| of every measured impact; None skips",
+    "nrmse": "-, bound on the RMS of (phi - phi_ref) / alpha over the common time grid; None "
+             "skips",
+    "verdict": "-, require the same overturning verdict as the reference",
+    "max_penetration": "m, bound on the largest contact penetration of a run (engines)",
+    "max_sliding": "m, bound on the largest tangential slip of a contact point (engines)",
+}
 
 #: Columns of :attr:`Comparison.table`, in order: column -> "unit, definition".
 METRIC_COLUMNS: dict[str, str] = {
@@ -92,6 +166,12 @@ ETA_COLUMNS: dict[str, str] = {
     "rel_error": "-, eta / eta_ref - 1",
 }
 
+#: Columns derived from a metrics table (:func:`with_derived`; not in :data:`METRIC_COLUMNS`).
+DERIVED_COLUMNS: dict[str, str] = {
+    "eta_mean_rel_error": "-, max over the two directions of |eta_mean / eta_ref - 1| "
+                          "(mean effective eta against the analytic eta)",
+}
+
 _BOOL_COLUMNS = ("overturned", "overturned_ref", "verdict_agrees", "energy_gained_at_impact",
                  "contact_opened")
 _INT_COLUMNS = ("n_impacts", "n_impacts_ref", "steps")
@@ -101,14 +181,14 @@ _STR_COLUMNS = ("backend", "engine_version", "status", "reason")
 # =========================================================================================
 # The analytic constants of a scene (cached: a Reference is built from the scene once)
 # =========================================================================================
-def _reference_of(scene: Scene):
+def _reference_of(scene: "Scene"):
     """``rockbench.analytic.reference.Reference`` of ``scene`` (pure physics, cached)."""
     from .analytic.reference import reference_of
 
     return reference_of(scene)
 
 
-def _inertia0(scene: Scene, direction: int) -> float:
+def _inertia0(scene: "Scene", direction: int) -> float:
     """Generalised inertia [kg m^2] of the mechanism rocking in ``direction`` at phi = 0."""
     return float(_reference_of(scene).dyn[direction].terms(0.0).inertia)
 
@@ -326,9 +406,16 @@ class Comparison:
         One row per backend (reference row included), columns :data:`METRIC_COLUMNS`.
     eta : pandas.DataFrame
         One row per (backend, impact), columns :data:`ETA_COLUMNS`.
+    duration : float or None
+        Simulated time [s] asked for (None: the default).
+    settings : dict
+        Backend name -> the settings its run used.
+    constants : dict
+        The scene's analytic constants (``rockbench.info(scene)``: keys and units in
+        :data:`rockbench.analytic.reference.CONSTANTS`), for the report.
     """
 
-    scene: Scene
+    scene: "Scene"
     motion: dict
     phi0: float
     results: dict[str, Result]
@@ -336,6 +423,7 @@ class Comparison:
     eta: pd.DataFrame
     duration: float | None = None
     settings: dict[str, Any] = field(default_factory=dict)
+    constants: dict[str, Any] = field(default_factory=dict)
 
     def histories(self) -> pd.DataFrame:
         """Tidy rotation histories: backend, t [s], phi [rad], phidot [rad/s], ground_acc
@@ -374,22 +462,11 @@ class Comparison:
         return self._write(directory, "parquet", lambda df, p: df.to_parquet(p, index=False))
 
 
-def _settings_for(settings: Mapping[str, Any] | None, name: str) -> tuple[Any, dict[str, Any]]:
-    """(settings object or None, overrides dict) for backend ``name``."""
-    if not settings or name not in settings:
-        return None, {}
-    s = settings[name]
-    if s is None:
-        return None, {}
-    if isinstance(s, Mapping):
-        return None, dict(s)
-    return s, {}
-
-
-def compare(scene: Scene, motion=None, *, engines=None, phi0: float = 0.0,
+def compare(scene: "Scene", motion=None, *, engines=None, phi0: float = 0.0,
             duration: float | None = None, settings: Mapping[str, Any] | None = None,
             progress: bool = False) -> Comparison:
-    """Run the reference and every selected backend on ``scene`` and measure them.
+    """Run the reference and every selected backend on ``scene`` and measure them
+    (:func:`rockbench.runner.run_all`, then :func:`metrics` and :func:`eta_rows`).
 
     Parameters
     ----------
@@ -409,56 +486,15 @@ def compare(scene: Scene, motion=None, *, engines=None, phi0: float = 0.0,
     progress : bool
         Show a tqdm progress bar naming the running backend.
     """
-    from .engines import available_backends, get_backend
+    from .analytic.reference import reference_of
+    from .runner import REFERENCE, resolve_engines, run_all
 
-    if not isinstance(scene, Scene):
-        raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")
-    if engines is None:
-        names = available_backends()
-    else:
-        if isinstance(engines, str):
-            engines = [engines]
-        names = list(dict.fromkeys(engines))
-        for n in names:
-            _check_engine_name(n)
-    if settings is not None:
-        if not isinstance(settings, Mapping):
-            raise ParameterError("settings", type(settings).__name__,
-                                 "a dict: backend name -> Settings or dict of overrides")
-        from .engines import REGISTRY
-        for k in settings:
-            if k not in REGISTRY:
-                raise ParameterError("settings", k,
-                                     f"keyed by backend names: {', '.join(REGISTRY)}")
-    order = [REFERENCE] + [n for n in names if n != REFERENCE]
-
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=len(order), desc="compare", unit="backend")
-    results: dict[str, Result] = {}
-    unavailable: dict[str, str] = {}
-    try:
-        for name in order:
-            if bar is not None:
-                bar.set_description(f"{scene.name}: {name}")
-            obj, over = _settings_for(settings, name)
-            try:
-                backend = get_backend(name)(scene, obj, **over)
-                results[name] = backend.run(motion, duration=duration, phi0=phi0)
-            except BackendUnavailable as e:
-                if name == REFERENCE:
-                    raise
-                unavailable[name] = str(e)
-            if bar is not None:
-                bar.update(1)
-    finally:
-        if bar is not None:
-            bar.close()
-
+    names = resolve_engines(engines)
+    results, unavailable = run_all(scene, motion, engines=names, phi0=phi0, duration=duration,
+                                   settings=settings, progress=progress)
     reference = results[REFERENCE]
     rows, etas = [], []
-    for name in order:
+    for name in [REFERENCE] + [n for n in names if n != REFERENCE]:
         if name in results:
             rows.append(metrics(results[name], reference))
             etas.extend(eta_rows(results[name], reference))
@@ -470,12 +506,63 @@ def compare(scene: Scene, motion=None, *, engines=None, phi0: float = 0.0,
                       motion=motion.describe() if motion is not None else {"kind": "none"},
                       phi0=float(phi0), results=results, table=_table(rows),
                       eta=_eta_table(etas), duration=duration,
-                      settings={k: results[k].settings for k in results})
+                      settings={k: r.settings for k, r in results.items()},
+                      constants=reference_of(scene).constants())
 
 
-def _check_engine_name(name: Any) -> None:
-    """Raise ParameterError unless ``name`` is a registered backend name."""
-    from .engines import REGISTRY
+# =========================================================================================
+# Derived metrics (tables in, tables out)
+# =========================================================================================
+def with_derived(table: pd.DataFrame) -> pd.DataFrame:
+    """``table`` (columns of :data:`METRIC_COLUMNS`) with :data:`DERIVED_COLUMNS` added."""
+    t = table.copy()
+    if {"eta_ccw_mean", "eta_ccw_ref", "eta_cw_mean", "eta_cw_ref"} <= set(t.columns):
+        a = (t["eta_ccw_mean"].astype(float) / t["eta_ccw_ref"].astype(float) - 1.0).abs()
+        b = (t["eta_cw_mean"].astype(float) / t["eta_cw_ref"].astype(float) - 1.0).abs()
+        t["eta_mean_rel_error"] = pd.concat([a, b], axis=1).max(axis=1, skipna=True)
+    return t
 
-    if not isinstance(name, str) or name not in REGISTRY:
-        raise ParameterError("engines", name, f"registered backend names: {', '.join(REGISTRY)}")
+
+def overturn_map(frame: pd.DataFrame, *, engine: str | None = None, scene: str | None = None,
+                 shape: str | None = None, sign: int | None = None,
+                 value: str = "overturned") -> pd.DataFrame:
+    """Pivot a sweep frame of Ricker cases into a map: index ``A`` (rows, a_g / (g tan alpha)),
+    columns ``W`` (omega_g / p), cells ``value`` (default ``overturned`` as 1.0 / 0.0; NaN where
+    the case is not ``ok``). Filters select one engine / scene / shape / sign; a map that would
+    still hold two cases in one cell raises ParameterError naming the column that differs."""
+    if not isinstance(frame, pd.DataFrame) or "motion.A" not in frame or "motion.W" not in frame:
+        raise ParameterError("frame", type(frame).__name__,
+                             "a run_cases frame of Ricker cases given by A and W")
+    if value not in frame:
+        raise ParameterError("value", value, "a column of the frame, e.g. overturned, "
+                                             "max_abs_phi_over_alpha")
+    df = frame[frame["motion.kind"] == "ricker"]
+    for col, want in (("engine", engine), ("scene", scene), ("motion.shape", shape),
+                      ("motion.sign", sign)):
+        if want is not None:
+            df = df[df[col] == want]
+    if df.empty:
+        raise ParameterError("frame", "no matching rows",
+                             "rows for the selected engine/scene/shape/sign")
+    keys = df[["motion.A", "motion.W"]]
+    if keys.duplicated().any():
+        varying = [c for c in ("engine", "scene", "motion.shape", "motion.sign", "case_id")
+                   if c in df and df[c].nunique() > 1]
+        raise ParameterError(varying[0] if varying else "frame", "several values",
+                             "one value: select it with the matching argument "
+                             "(engine=, scene=, shape=, sign=)")
+
+    def num(v: Any) -> float:
+        try:
+            return math.nan if v is None else float(v)
+        except (TypeError, ValueError):
+            return math.nan
+
+    vals = pd.Series([num(v) for v in df[value]], index=df.index)
+    vals = vals.where(df["status"] == "ok")
+    out = pd.DataFrame({"A": df["motion.A"].astype(float), "W": df["motion.W"].astype(float),
+                        "v": vals.astype(float)})
+    table = out.pivot(index="A", columns="W", values="v").sort_index().sort_index(axis=1)
+    table.columns.name = "W"
+    table.index.name = "A"
+    return table

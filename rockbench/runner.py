@@ -15,6 +15,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from .engines import REGISTRY, available_backends, get_backend
+from .engines.base import run_window
 from .errors import BackendUnavailable, ParameterError
 from .result import Result
 from .scene.scene import Scene
@@ -44,8 +45,35 @@ def run(scene: Scene, motion=None, *, engine: str = "analytic",
     settings : the backend's Settings, optional; ``setting_overrides`` replace single fields
         (e.g. ``dt=2e-4``).
     """
+    _check_scene(scene)
+    _check_motion(motion)
+    if not isinstance(engine, str):
+        raise ParameterError("engine", engine, f"a backend name: {', '.join(REGISTRY)}")
     backend = get_backend(engine)(scene, settings, **setting_overrides)
+    # the run's size (samples, steps) is checked before the backend allocates anything
+    run_window(scene, motion, duration, phi0, settings=backend.settings)
     return backend.run(motion, duration=duration, phi0=phi0)
+
+
+def _check_scene(scene: Any) -> None:
+    if not isinstance(scene, Scene):
+        raise ParameterError("scene", _shown(scene),
+                             "a rockbench Scene (rockbench.load_scene(name) or rockbench.Scene)")
+
+
+def _check_motion(motion: Any) -> None:
+    from .scene.motion import GroundMotion
+
+    if motion is not None and not isinstance(motion, GroundMotion):
+        raise ParameterError("motion", _shown(motion),
+                             "a GroundMotion (rockbench.RickerPulse, a Record from "
+                             "rockbench.load_record) or None for free rocking")
+
+
+def _shown(x: Any) -> str:
+    text = repr(x)
+    text = text if len(text) <= 50 else text[:47] + "..."
+    return f"{text} ({type(x).__name__})"
 
 
 def resolve_engines(engines: str | Sequence[str] | None, *, name: str = "engines"
@@ -56,11 +84,13 @@ def resolve_engines(engines: str | Sequence[str] | None, *, name: str = "engines
         return available_backends()
     if isinstance(engines, str):
         engines = [engines]
-    names = list(dict.fromkeys(engines))
-    for n in names:
+    if not isinstance(engines, Sequence):
+        raise ParameterError(name, _shown(engines), "a backend name or a list of them: "
+                             f"{', '.join(REGISTRY)}")
+    for n in engines:
         if not isinstance(n, str) or n not in REGISTRY:
             raise ParameterError(name, n, f"registered backend names: {', '.join(REGISTRY)}")
-    return names
+    return list(dict.fromkeys(engines))
 
 
 def _settings_for(settings: Mapping[str, Any] | None, name: str) -> tuple[Any, dict[str, Any]]:
@@ -84,8 +114,8 @@ def run_all(scene: Scene, motion=None, *, engines: str | Sequence[str] | None = 
     ``settings`` maps a backend name to its Settings object or a dict of overrides (e.g.
     ``{"pymunk": {"dt": 2e-4}}``); ``progress`` shows a tqdm bar naming the running backend.
     """
-    if not isinstance(scene, Scene):
-        raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")
+    _check_scene(scene)
+    _check_motion(motion)
     names = resolve_engines(engines)
     if settings is not None:
         if not isinstance(settings, Mapping):
@@ -128,6 +158,5 @@ def info(scene: Scene) -> dict[str, Any]:
     :data:`rockbench.analytic.reference.CONSTANTS`, as in ``rockbench info --json``)."""
     from .analytic.reference import reference_of
 
-    if not isinstance(scene, Scene):
-        raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")
+    _check_scene(scene)
     return reference_of(scene).constants()

@@ -17,6 +17,8 @@ from rockbench.result import HISTORY_COLUMNS
 
 RECORDS = Path(__file__).resolve().parents[2] / "shared" / "records"
 EL_CENTRO = RECORDS / "IV1940_ElCentro_180.AT2"
+needs_pymunk = pytest.mark.skipif("pymunk" not in rb.available_backends(),
+                                  reason="pymunk (an optional engine) is not installed")
 
 INFO_KEYS = {"alpha", "p", "eta_ccw", "eta_cw", "lambda_ccw", "lambda_cw", "phi_cr_ccw",
              "phi_cr_cw"}
@@ -87,9 +89,11 @@ def test_engines_json(capsys):
     assert by_name["analytic"]["available"] is True
     for r in rows:
         assert ("version" in r) if r["available"] else ("reason" in r)
-    pymunk = pytest.importorskip("pymunk")
-    assert by_name["pymunk"]["available"] is True
-    assert pymunk.version in by_name["pymunk"]["version"]
+    if "pymunk" in rb.available_backends():
+        import pymunk
+
+        assert by_name["pymunk"]["available"] is True
+        assert pymunk.version in by_name["pymunk"]["version"]
 
 
 # --- run -------------------------------------------------------------------------------------
@@ -145,6 +149,21 @@ def test_run_record(capsys):
     assert scaled["uplifted"] is False   # 0.078 g < lambda g
 
 
+def test_run_record_fixtures(capsys):
+    """The record fixtures shipped with the tests (never skipped on a fresh clone)."""
+    data = Path(__file__).resolve().parent / "data" / "records"
+    d = cli_json(capsys, "run", "paper-asymmetric", "--record",
+                 str(data / "IV1940_ElCentro_180_5s.AT2"), "--duration", "5")
+    assert d["status"] == "ok" and d["motion"]["npts"] == 500
+    assert d["motion"]["pga_m_s2"] == pytest.approx(0.31288 * 9.80665, abs=1e-4)
+    assert d["uplifted"] is True          # PGA 0.313 g > lambda g, as with the whole record
+    h = cli_json(capsys, "run", "paper-asymmetric", "--record", str(data / "LA21_6s.dat"),
+                 "--record-dt", "0.02", "--record-units", "cm/s2")
+    assert h["motion"]["npts"] == 300 and h["motion"]["dt_s"] == 0.02
+    assert h["motion"]["pga_m_s2"] == pytest.approx(0.74112, abs=1e-9)
+    assert h["uplifted"] is False         # 0.076 g < lambda g
+
+
 def test_run_out_writes_history_and_events(tmp_path, capsys):
     out = tmp_path / "sub" / "history.csv"
     d = cli_json(capsys, "run", "paper-symmetric", "--phi0", "0.5", "--duration", "4",
@@ -168,8 +187,8 @@ def test_run_human_summary_has_units(capsys):
     assert "rad" in text and "s wall" in text and "real-time factor" in text
 
 
+@needs_pymunk
 def test_run_pymunk_free_rocking(capsys):
-    pytest.importorskip("pymunk")
     d = cli_json(capsys, "run", "paper-symmetric", "--engine", "pymunk", "--phi0", "0.5",
                  "--duration", "1")
     assert RUN_KEYS <= set(d)
@@ -179,8 +198,8 @@ def test_run_pymunk_free_rocking(capsys):
     assert d["steps"] == round(1.0 / d["settings"]["dt"])
 
 
+@needs_pymunk
 def test_run_pymunk_eta_and_settings(capsys):
-    pytest.importorskip("pymunk")
     d = cli_json(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0", "0.5",
                  "--duration", "3", "--dt", "5e-4", "--setting", "iterations=20")
     assert d["settings"]["dt"] == 5e-4 and d["settings"]["iterations"] == 20
@@ -192,8 +211,8 @@ def test_run_pymunk_eta_and_settings(capsys):
         assert eta == pytest.approx(housner, rel=5e-3)
 
 
+@needs_pymunk
 def test_run_coarse_dt_raises_output_interval(capsys):
-    pytest.importorskip("pymunk")
     d = cli_json(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0", "0.5",
                  "--duration", "1", "--dt", "2e-3")
     assert d["settings"]["output_dt"] == 2e-3 and d["steps"] == 500
@@ -262,8 +281,8 @@ def test_headerless_record_needs_dt_and_units(capsys, extra, name):
     assert len(err) == 1 and name in err[0]
 
 
+@needs_pymunk
 def test_pymunk_bad_settings(capsys):
-    pytest.importorskip("pymunk")
     for argv, name in ((["--dt", "0.5"], "dt"), (["--setting", "iterations=abc"], "iterations"),
                        (["--setting", "friction=nan"], "friction")):
         assert main(["run", "housner-block", "--engine", "pymunk", "--phi0", "0.5", *argv]) == 2
@@ -272,10 +291,12 @@ def test_pymunk_bad_settings(capsys):
 
 
 def test_unexpected_errors_keep_their_traceback(monkeypatch):
+    import rockbench.runner
+
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")
 
-    monkeypatch.setattr(rb, "run", broken)
+    monkeypatch.setattr(rockbench.runner, "run", broken)
     with pytest.raises(RuntimeError, match="a bug"):
         main(["run", "housner-block", "--phi0", "0.5"])
 
@@ -285,10 +306,9 @@ def test_help_exits_0(capsys):
     assert "--amplitude" in capsys.readouterr().out
 
 
-# --- compare and report (modules of their own) -------------------------------------------------
+# --- compare and report (modules of their own: an import error fails, never skips) ----------
+@needs_pymunk
 def test_compare_table(tmp_path, capsys):
-    pytest.importorskip("rockbench.compare")
-    pytest.importorskip("pymunk")
     csv = tmp_path / "table.csv"
     d = cli_json(capsys, "compare", "housner-block", "--engines", "pymunk", "--phi0", "0.5",
                  "--duration", "2", "--csv", str(csv))
@@ -304,9 +324,10 @@ def test_compare_table(tmp_path, capsys):
     assert "pymunk" in text and "nrmse" in text and "units:" in text
 
 
+@needs_pymunk
 def test_compare_settings_reach_the_backend(capsys, monkeypatch):
-    compare_mod = pytest.importorskip("rockbench.compare")
-    pytest.importorskip("pymunk")
+    import rockbench.compare as compare_mod
+
     seen = {}
     real = compare_mod.compare
 
@@ -326,30 +347,29 @@ def test_compare_settings_reach_the_backend(capsys, monkeypatch):
     assert "no_such" in capsys.readouterr().err
 
 
+@needs_pymunk
 def test_compare_report(tmp_path, capsys):
-    pytest.importorskip("rockbench.compare")
-    pytest.importorskip("pymunk")
-    report = pytest.importorskip("rockbench.report")
-    if not hasattr(report, "write_case_report"):
-        pytest.skip("rockbench.report.write_case_report not written yet")
     assert main(["compare", "housner-block", "--engines", "pymunk", "--phi0", "0.5",
                  "--duration", "1", "--report", str(tmp_path / "case")]) == 0
     out = capsys.readouterr().out
     path = Path(out.strip().splitlines()[-1].removeprefix("report: "))
     assert path.exists()
+    page = path.read_text(encoding="utf-8")
+    # the analytic constants come with the comparison (the report does not call the runner)
+    consts = rb.info(rb.load_scene("housner-block"))
+    assert "Analytic constants" in page and f"{consts['eta_ccw']:.4g}" in page
 
 
 def test_report_passes_options_to_run_campaign(tmp_path, capsys, monkeypatch):
-    report = pytest.importorskip("rockbench.report")
-    if not hasattr(report, "run_campaign"):
-        pytest.skip("rockbench.report.run_campaign not written yet")
+    import rockbench.campaign as campaign
+
     seen = {}
 
     def fake(out_dir="reports", **kwargs):
         seen.update(kwargs, out_dir=out_dir)
         return Path(out_dir) / "index.html"
 
-    monkeypatch.setattr(report, "run_campaign", fake)
+    monkeypatch.setattr(campaign, "run_campaign", fake)
     assert main(["report", "--out", str(tmp_path), "--quick", "--engines", "pymunk",
                  "--dask", "tcp://127.0.0.1:8786", "--store", str(tmp_path / "s.parquet"),
                  "--records", str(tmp_path), "--workers", "3"]) == 0
@@ -366,6 +386,24 @@ def test_report_passes_options_to_run_campaign(tmp_path, capsys, monkeypatch):
     assert seen["workers"] == 3
     assert main(["report", "--records", str(tmp_path / "missing")]) == 2
     assert "--records" in capsys.readouterr().err
+
+
+def test_a_broken_compare_module_fails_loudly(monkeypatch):
+    """An import error in the package is a bug: the command shows it, it never prints
+    "unavailable" (and the tests above never skip on it)."""
+    import builtins
+
+    real_import = builtins.__import__
+
+    def broken(name, globals=None, locals=None, fromlist=(), level=0):
+        if level == 1 and name == "" and fromlist and "compare" in fromlist:
+            raise ImportError("simulated: rockbench.compare is broken")
+        return real_import(name, globals, locals, fromlist, level)
+
+    monkeypatch.setattr(builtins, "__import__", broken)
+    with pytest.raises(ImportError, match="simulated"):
+        main(["compare", "housner-block", "--engines", "analytic", "--phi0", "0.5",
+              "--duration", "0.5"])
 
 
 # --- entry point -------------------------------------------------------------------------------

@@ -9,6 +9,7 @@ the way (pymunk agrees with the analytic model on the cases used).
 from __future__ import annotations
 
 import base64
+import json
 import math
 import re
 import struct
@@ -19,11 +20,12 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench.compare import ETA_COLUMNS, METRIC_COLUMNS, compare
-from rockbench.report import campaign as C
+from rockbench.compare import ETA_COLUMNS, METRIC_COLUMNS, TOLERANCES, compare
+from rockbench import campaign as C
+from rockbench.report import case_page as P
 from rockbench.report import figures as F
-from rockbench.report import html as H
-from rockbench.report import run_campaign, write_case_report
+from rockbench.report import write_case_report
+from rockbench.campaign import run_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -146,7 +148,7 @@ def test_case_conclusion_reports_disagreements(case):
     bad = t.loc[[i]].assign(backend="mujoco", status="diverged", reason="NaN in the state")
     gone = t.loc[[i]].assign(backend="pybullet", status="unavailable",
                              reason="pybullet does not import")
-    text = " ".join(H.case_conclusion(pd.concat([t, bad, gone], ignore_index=True)))
+    text = " ".join(P.case_conclusion(pd.concat([t, bad, gone], ignore_index=True)))
     assert "pymunk overturns where the analytic model survives" in text
     assert "pymunk slid by up to 20 mm" in text
     assert "mujoco did not finish cleanly (diverged): NaN in the state" in text
@@ -178,7 +180,7 @@ def test_grades_and_documented_thresholds():
     assert F.grade("status", "diverged") == "poor"
     assert F.grade("backend", "pymunk") == "na"
     doc = (ROOT / "docs" / "report.md").read_text(encoding="utf-8")
-    for metric, (good, fair) in F.THRESHOLDS.items():
+    for metric, (good, fair) in TOLERANCES["grades"].items():
         row = next((ln for ln in doc.splitlines() if ln.startswith(f"| `{metric}`")), None)
         assert row is not None, f"docs/report.md has no threshold row for {metric}"
         cells = [c.strip() for c in row.split("|")]
@@ -319,7 +321,7 @@ def test_quick_campaign_resumes_from_its_store(quick, monkeypatch):
     def boom(*a, **k):
         raise AssertionError("a finished case ran again")
 
-    import rockbench.sweep as S
+    import rockbench.sweep.runs as S
     monkeypatch.setattr(C, "_run_job", boom)
     monkeypatch.setattr(S, "run_case", boom)
     run_campaign(path.parent, engines=["pymunk"], quick=True, progress=False,
@@ -327,6 +329,25 @@ def test_quick_campaign_resumes_from_its_store(quick, monkeypatch):
     after = pd.read_csv(path.parent / "metrics.csv")
     cols = [c for c in after.columns if c not in ("wall_s", "real_time_factor")]
     pd.testing.assert_frame_equal(before[cols], after[cols])
+
+
+def test_quick_campaign_keeps_one_store(quick):
+    """Comparisons and sweep cases live in the one store (rockbench.sweep.store), under the code
+    fingerprint, named by the one key scheme."""
+    from rockbench.sweep import load_store, store as S
+    from rockbench.sweep.cases import normalize_case
+
+    d = quick[0].parent / "store" / C.code_fingerprint()
+    assert C.code_fingerprint() == S.code_fingerprint()
+    pkl = sorted((d / "comparisons").glob("*.pkl"))
+    assert len(pkl) == 2 + 2 + 2          # quick: 2 pulse cases, 2 free runs, 2 time steps
+    for p in pkl:
+        assert p.stem == S.key(S.load_payload(p.parent, p.stem)["job"])
+    rows = load_store(d / "cases")
+    assert len(rows) == 4 + 8             # the 2 x 2 map points, the 8 record runs
+    for _, r in rows.iterrows():
+        assert r["case_id"] == S.key(normalize_case(json.loads(r["case"])))
+    assert not list(d.rglob(".tmp-*"))    # every write completed by its rename
 
 
 def _records_of(page_path: Path) -> str:

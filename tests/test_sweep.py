@@ -1,4 +1,4 @@
-"""rockbench.sweep: cases, executors, the resumable store, grids and maps."""
+"""rockbench.sweep: cases, executors, the resumable store, grids and maps (and the catalogue)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,9 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench import sweep
+from rockbench.sweep import runs, store
+from rockbench.sweep.cases import CHECK_SCENE, campaign_plan, catalogue
+from rockbench.sweep.executors import execute
 from rockbench.engines import REGISTRY, available_backends
 from rockbench.engines.analytic import AnalyticBackend
 from rockbench.sweep import (TIMING_COLUMNS, case_id, load_store, normalize_case, overturn_map,
@@ -100,13 +102,13 @@ def test_resume_runs_only_the_missing_cases(tmp_path, monkeypatch):
     store = tmp_path / "store"
     cases = _grid()
     calls = []
-    real = sweep.run_case
+    real = runs.run_case
 
     def counting(case):
         calls.append(case_id(case))
         return real(case)
 
-    monkeypatch.setattr(sweep, "run_case", counting)
+    monkeypatch.setattr(runs, "run_case", counting)
     half = len(cases) // 2
     first = run_cases(cases[:half], store=store, executor="serial", progress=False)
     assert len(calls) == half and len(load_store(store)) == half
@@ -128,7 +130,7 @@ def test_resume_runs_only_the_missing_cases(tmp_path, monkeypatch):
 def test_interrupted_sweep_keeps_what_finished(tmp_path, monkeypatch):
     store = tmp_path / "store"
     cases = _grid()
-    real = sweep.run_case
+    real = runs.run_case
     n = [0]
 
     def dies_on_third(case):
@@ -137,13 +139,16 @@ def test_interrupted_sweep_keeps_what_finished(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return real(case)
 
-    monkeypatch.setattr(sweep, "run_case", dies_on_third)
+    monkeypatch.setattr(runs, "run_case", dies_on_third)
     with pytest.raises(KeyboardInterrupt):
         run_cases(cases, store=store, executor="serial", progress=False)
     assert len(load_store(store)) == 2          # written as they finished, not at the end
-    monkeypatch.setattr(sweep, "run_case", real)
+    monkeypatch.setattr(runs, "run_case", real)
     df = run_cases(cases, store=store, executor="serial", progress=False)
     assert (df["status"] == "ok").all() and len(load_store(store)) == len(cases)
+    # resumed = uninterrupted, column for column (timings aside)
+    whole = run_cases(cases, executor="serial", progress=False)
+    pd.testing.assert_frame_equal(_physics(df), _physics(whole))
 
 
 def test_errors_are_skipped_on_resume_unless_retried(tmp_path):
@@ -244,3 +249,63 @@ def test_overturn_map_of_the_block():
     with pytest.raises(rb.ParameterError, match="engine"):
         overturn_map(both)
     assert overturn_map(both, engine="analytic").equals(m)
+
+
+# --- the store's payloads and keys ------------------------------------------------------------
+def test_payloads_are_written_atomically_and_keyed_like_cases(tmp_path):
+    item = {"kind": "pulse", "scene": "housner-block", "engines": ["analytic"],
+            "motion": {"kind": "ricker", "shape": "symmetric", "sign": 1, "A": 3, "W": 4}}
+    k = store.key(item)
+    assert k == store.key({**item, "motion": {**item["motion"], "A": np.float64(3.0)}})
+    assert len(k) == 16 and k != store.key({**item, "scene": "paper-asymmetric"})
+    # a case's id is the store key of the normalized case: one key scheme
+    case = {"scene": "housner-block", "motion": item["motion"]}
+    assert case_id(case) == store.key(normalize_case(case))
+    assert store.load_payload(tmp_path, k) is None
+    store.write_payload(tmp_path, k, {"x": np.arange(3)})
+    assert list(store.load_payload(tmp_path, k)["x"]) == [0, 1, 2]
+    assert [p.name for p in tmp_path.iterdir()] == [f"{k}.pkl"]     # no temporary file left
+    (tmp_path / f"{k}.pkl").write_bytes(b"garbage")                   # unreadable: run again
+    assert store.load_payload(tmp_path, k) is None
+
+
+def test_code_fingerprint_is_stable():
+    fp = store.code_fingerprint()
+    assert len(fp) == 12 and int(fp, 16) >= 0 and fp == store.code_fingerprint()
+
+
+# --- the executor, generic over a function ------------------------------------------------------
+def _square(x):
+    return x * x
+
+
+@pytest.mark.parametrize("executor", ["serial", "process"])
+def test_execute_hands_every_result_over(executor):
+    got = {}
+    execute(_square, [(str(i), i) for i in range(5)], on_result=got.__setitem__,
+            crashed=lambda item, reason: None, executor=executor, workers=2, progress=False)
+    assert got == {str(i): i * i for i in range(5)}
+
+
+# --- the catalogue ------------------------------------------------------------------------------
+def test_catalogue_holds_the_cross_engine_cases_and_the_campaign_plan():
+    c = catalogue()
+    assert [f.id for f in c.free_cases] == ["free-housner-block", "free-paper-symmetric",
+                                            "free-paper-asymmetric"]
+    assert len(c.survive_cases) == 16 and len(c.overturn_cases) == 16
+    ot = c.overturn_cases[0]
+    assert (ot.scene, ot.W, ot.shape, ot.sign, ot.A, ot.fall) == (
+        "paper-asymmetric", 3.0, "symmetric", 1, round(1.2 * 3.2342, 4), 4.0)
+    plan = campaign_plan()
+    assert plan["scenes"][0] == "paper-symmetric" and len(plan["scenes"]) == 6
+    assert plan["pulse_points"] == ((2.0, 3.0), (4.0, 4.0))
+    assert plan["dt_sweep"] == (2e-3, 1e-3, 5e-4, 2e-4)
+    assert plan["map_A"] == (1.5, 2.5, 3.5, 5.0, 7.0) and plan["map_W"] == (1.5, 2.0, 3.0, 4.0, 6.0)
+    quick = campaign_plan(quick=True)
+    assert quick["scenes"] == ("paper-asymmetric", "paper-asymmetric-hybrid-eps1")
+    assert quick["max_records"] == 1 and plan["max_records"] is None
+    plan["scenes"] = ()                                  # a copy: the catalogue is unchanged
+    assert campaign_plan()["scenes"][0] == "paper-symmetric"
+    assert CHECK_SCENE == "housner-block"
+    for name in plan["scenes"] + tuple(c.free_durations) + (CHECK_SCENE,):
+        rb.load_scene(name)                              # every scene it names exists

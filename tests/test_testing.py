@@ -92,6 +92,37 @@ def test_a_diverged_run_fails_at_once(ref):
         assert_agree(replace(ref, summary=s), ref)
 
 
+def test_runs_of_another_case_are_refused(ref):
+    """assert_agree compares two runs of one case: another scene, motion or phi0 is a
+    ParameterError naming what differs, never a pass (issue 15)."""
+    other_scene = replace(ref, scene=rb.Scene(rb.Block(width=1.0, height=4.0), name="other"))
+    with pytest.raises(rb.ParameterError, match="same scene parameters.*differ in structure"):
+        assert_agree(other_scene, ref)
+    renamed = replace(ref, scene=replace(BLOCK, name="renamed", description="a label"))
+    assert_agree(renamed, ref)                     # a name is not a parameter
+    weaker = rb.RickerPulse.dimensionless(A=2.0, W=4.0, structure=BLOCK.structure)
+    with pytest.raises(rb.ParameterError, match="same ground motion"):
+        assert_agree(replace(ref, motion=weaker.describe()), ref)
+    free = rb.run(BLOCK, None, phi0=0.5 * BLOCK.alpha, duration=1.0)
+    with pytest.raises(rb.ParameterError, match="same ground motion"):
+        assert_agree(free, ref)
+    other_phi0 = rb.run(BLOCK, None, phi0=0.3 * BLOCK.alpha, duration=1.0)
+    with pytest.raises(rb.ParameterError, match="same initial rotation"):
+        assert_agree(other_phi0, free)
+    assert_agree(free, free)
+
+
+def test_assert_agree_defaults_are_the_tolerance_table():
+    import inspect
+
+    from rockbench.compare import TOLERANCES
+
+    sig = inspect.signature(assert_agree).parameters
+    assert {k: sig[k].default for k in TOLERANCES["assert_agree"]} == TOLERANCES["assert_agree"]
+    assert TOLERANCES["assert_agree"] == dict(peak_rtol=0.03, eta_rtol=0.005, nrmse=0.005,
+                                              verdict=True)
+
+
 def test_bad_tolerances_raise_parameter_error(ref):
     with pytest.raises(rb.ParameterError, match="peak_rtol"):
         assert_agree(ref, ref, peak_rtol=-0.1)
@@ -100,8 +131,9 @@ def test_bad_tolerances_raise_parameter_error(ref):
 
 
 # --- check_backend ---------------------------------------------------------------------------
-@pytest.mark.parametrize("name", ["analytic"] + ENGINES[:1])
+@pytest.mark.parametrize("name", available_backends())
 def test_shipped_backends_pass_the_contract(name):
+    """Every available backend, the analytic reference included, honours the contract."""
     report = check_backend(name)
     assert report.ok and not report.failed
     names = [c.name for c in report.checks]
@@ -217,7 +249,8 @@ def test_user_example_is_the_one_in_the_docs():
 def test_plugin_import_is_cheap():
     code = ("import sys, rockbench.testing.plugin; "
             "print(sorted(m for m in ('pymunk', 'mujoco', 'pybullet', 'scipy', "
-            "'rockbench.testing.checks', 'rockbench.engines.pymunk') if m in sys.modules))")
+            "'rockbench.testing.contract', 'rockbench.testing.agree', 'rockbench.compare', "
+            "'rockbench.engines.pymunk') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"

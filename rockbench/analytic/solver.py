@@ -5,15 +5,26 @@ clockwise (-1), and whether the devices are intact. Between events, Eq. 17 of th
 the current mode is integrated with ``scipy.integrate.solve_ivp`` (an explicit Runge-Kutta method
 of order 8, DOP853, with tight tolerances) and these events:
 
-* uplift (from rest): the ground acceleration crosses lambda_ccw g upwards or lambda_cw g
-  downwards (Eq. 20), found by sign change on the motion's knots and Brent's method;
+* uplift (from rest): the ground acceleration *exceeds* lambda_ccw g (1 + UPLIFT_RTOL) or falls
+  below lambda_cw g (1 + UPLIFT_RTOL) (Eq. 20), found by a strict comparison on the motion's
+  knots and Brent's method, stepped just past the root so that the excess is strictly positive:
+  a grazing (tangent) touch of the threshold is not an uplift;
 * impact: phi returns to 0; phi'+ = eta phi'-, with eta of the mechanism the structure rocks into
   after the impact (:mod:`rockbench.analytic.impact`). A post-impact |phi'| below the rest
-  threshold ends the rocking (the structure is at rest; it may uplift again at once);
+  threshold ends the rocking (the structure is at rest; it may uplift again at once), and so
+  does impact chatter (two successive small post-impact velocities, close in time: the
+  structure settles onto its base instead of stepping through a Zeno sequence of impacts);
 * fracture: a tendon's strain reaches eps_f; tendons and dampers are removed for the rest of the run;
 * overturn: |phi| reaches the scene's fall angle (terminal);
-* critical (recorded only): |phi| exceeds the critical angle of the current potential;
+* critical (recorded only): |phi| exceeds the critical angle of the current potential, by an
+  upward crossing or because a segment starts at or beyond it (after a change of the potential:
+  fracture; or from the initial rotation);
 * peak (recorded only): phi' = 0 while rocking, i.e. a local extremum of phi.
+
+The rules and their constants (uplift margin, rest, chatter, progress) are stated once in
+:mod:`rockbench.analytic.rules`. The event loop cannot spin: if it stops advancing in time (or
+the integrator or the uplift search fails) the run ends there with
+``summary.status == "invalid"`` and the reason, never with an exception.
 
 A run ends at ``t_end`` or, earlier, once the structure is at rest and the ground motion can no
 longer uplift it.
@@ -23,6 +34,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -36,6 +48,7 @@ from ..errors import ParameterError, check_positive
 from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
                       output_grid)
 from ..scene.scene import Scene
+from . import rules
 from .reference import Reference
 
 __all__ = ["AnalyticSettings", "simulate"]
@@ -48,7 +61,8 @@ class AnalyticSettings:
     rtol, atol : relative and absolute tolerances of solve_ivp (atol in rad and rad/s).
     method : an explicit solve_ivp method ("DOP853" default, "RK45", "Radau" ... ).
     output_dt : interval [s] of the history samples (independent of the integrator's steps).
-    rest_ratio : a post-impact |phi'| below rest_ratio * p * alpha [rad/s] ends rocking.
+    rest_ratio : a post-impact |phi'| below rest_ratio * p * alpha [rad/s] ends rocking
+        (default :data:`rockbench.analytic.rules.REST_RATIO`).
     history : "full" (every column) or "minimal" (t, phi, phidot, ground_acc, mode,
         devices_intact; other columns NaN) - minimal is faster for sweeps.
     """
@@ -57,7 +71,7 @@ class AnalyticSettings:
     atol: float = 1e-12
     method: str = "DOP853"
     output_dt: float = 1e-3
-    rest_ratio: float = 1e-4
+    rest_ratio: float = rules.REST_RATIO
     history: str = "full"
 
     def __post_init__(self) -> None:
@@ -135,7 +149,15 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
 
     acc = mot.acceleration
     v_rest = settings.rest_ratio * ref.p * ref.alpha
-    lam_p, lam_n = ref.lam[1] * G, ref.lam[-1] * G
+    # the rules' constants, read when the run starts (rockbench.analytic.rules)
+    v_chat = rules.CHATTER_VELOCITY_RATIO * ref.p * ref.alpha
+    dt_chat = rules.CHATTER_INTERVAL / ref.p
+    min_advance = rules.PROGRESS_MIN_ADVANCE / ref.p
+    window = max(1, int(rules.PROGRESS_WINDOW))
+    max_iter = int(rules.MAX_EVENT_ITERATIONS)
+    # uplift thresholds with the margin: lambda_ccw > 0 > lambda_cw, so both move outwards
+    thr_p = ref.lam[1] * G * (1.0 + rules.UPLIFT_RTOL)
+    thr_n = ref.lam[-1] * G * (1.0 + rules.UPLIFT_RTOL)
     intact = scene.has_devices
 
     segments: list[tuple[float, float, Any, int, bool]] = []
@@ -146,10 +168,11 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     fractured = False
     exceeded = False
     max_abs = abs(phi0)
+    status, reason = "ok", None
 
     def uplift_direction(t: float) -> int:
         a = float(acc(t))
-        return 1 if a > lam_p else (-1 if a < lam_n else 0)
+        return 1 if a > thr_p else (-1 if a < thr_n else 0)
 
     def next_uplift(ta: float, tb: float) -> tuple[float | None, int]:
         s = uplift_direction(ta)
@@ -157,17 +180,22 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
             return ta, s
         ks = mot.knots(ta, tb)
         a = np.asarray(acc(ks), dtype=float)
-        hit = np.nonzero((a > lam_p) | (a < lam_n))[0]
+        hit = np.nonzero((a > thr_p) | (a < thr_n))[0]
         if hit.size == 0:
             return None, 0
         i = int(hit[0])
-        s = 1 if a[i] > lam_p else -1
-        thr = lam_p if s == 1 else lam_n
+        s = 1 if a[i] > thr_p else -1
+        thr = thr_p if s == 1 else thr_n
+        # excess over the threshold: <= 0 at ks[i-1], > 0 at ks[i], monotonic in between
+        excess = (lambda tt: float(acc(tt)) - thr) if s == 1 else (lambda tt: thr - float(acc(tt)))
         lo, hi = float(ks[i - 1]), float(ks[i])
-        tu = brentq(lambda tt: float(acc(tt)) - thr, lo, hi, xtol=1e-13, rtol=1e-14)
-        # step just past the root so the threshold is strictly exceeded
-        while uplift_direction(tu) != s and tu < hi:
-            tu = min(hi, tu + 1e-12 * max(1.0, abs(tu)))
+        tu = brentq(excess, lo, hi, xtol=1e-13, rtol=1e-14)
+        # step just past the root so that the excess is strictly positive (the increments
+        # double, so this ends in a few dozen evaluations at most, at hi if not before)
+        step = 1e-13 * max(1.0, abs(tu))
+        while tu < hi and not excess(tu) > 0.0:
+            tu = min(hi, tu + step)
+            step *= 2.0
         return tu, s
 
     if phi0 != 0.0:
@@ -177,15 +205,32 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     else:
         mode = 0
     t, phi, phid = t0, phi0, phidot0
+    # the last impact of the current rocking episode: time and |post-impact velocity|
+    last_impact: tuple[float, float] | None = None
 
     wall0 = time.perf_counter()
-    guard = 0
+    recent: deque[float] = deque(maxlen=window)    # loop start times, for the progress check
+    n_iter = 0
     while t < t_end and not overturned:
-        guard += 1
-        if guard > 200_000:
-            raise RuntimeError("analytic solver made no progress (event loop did not advance)")
+        n_iter += 1
+        recent.append(t)
+        if len(recent) == window and t - recent[0] < min_advance:
+            status = "invalid"
+            reason = (f"analytic event loop made no progress: {window} iterations advanced time by "
+                      f"{t - recent[0]:.3g} s < {min_advance:.3g} s at t = {t:.9g} s (mode {mode})")
+            break
+        if n_iter > max_iter:
+            status = "invalid"
+            reason = (f"analytic event loop exceeded {max_iter} iterations at t = {t:.9g} s "
+                      f"of {t_end:.9g} s")
+            break
         if mode == 0:
-            tu, s = next_uplift(t, t_end)
+            try:
+                tu, s = next_uplift(t, t_end)
+            except (ValueError, ArithmeticError, RuntimeError) as exc:
+                status = "invalid"
+                reason = f"uplift search failed at t = {t:.9g} s: {type(exc).__name__}: {exc}"
+                break
             if tu is None:
                 # no uplift before t_end: nothing can change any more once the motion is
                 # over, so the run ends at the later of now and the motion's end
@@ -197,6 +242,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
             rows.append(dict(t=tu, kind="uplift", phi=0.0, phidot_before=0.0, phidot_after=0.0,
                              eta=math.nan, direction=s))
             t, phi, phid, mode = tu, 0.0, 0.0, s
+            last_impact = None
             continue
 
         s = mode
@@ -206,7 +252,11 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         def rhs(tt, y, dyn=dyn_s, flag=flag):
             return (y[1], dyn.acceleration(y[0], y[1], float(acc(tt)), flag))
 
-        evs = [_event(lambda tt, y: y[0], -s, True),
+        # impact: s phi falls to 0. A segment may start at phi = 0 (after an uplift or an
+        # impact); the event is taken as positive at the segment's first instant, so that the
+        # root is the return to phi = 0 and never the start itself (after a just-exceeded
+        # uplift the first step can be far longer than the motion's tiny excursion)
+        evs = [_event(lambda tt, y, ts=t, s=s: s * y[0] if tt != ts else 1.0, -1, True),
                _event(lambda tt, y, s=s: s * y[0] - ref.fall[s], 1, True)]
         names = ["impact", "overturn"]
         if intact and math.isfinite(ref.fracture_angle[s]):
@@ -214,17 +264,31 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
             names.append("fracture")
         crit = ref.critical[(s, intact)]
         if math.isfinite(crit):
+            if s * phi >= crit:
+                # the segment starts at or beyond the critical angle of its potential (after a
+                # fracture, or from the initial rotation): no upward crossing will report it
+                exceeded = True
+                rows.append(dict(t=t, kind="critical", phi=phi, phidot_before=phid,
+                                 phidot_after=phid, eta=math.nan, direction=s))
             evs.append(_event(lambda tt, y, s=s, c=crit: s * y[0] - c, 1, False))
             names.append("critical")
-        evs.append(_event(lambda tt, y: y[1], -s, False))
+        # peak: s phi' falls to 0 (positive at the segment's first instant, as for the impact)
+        evs.append(_event(lambda tt, y, ts=t, s=s: s * y[1] if tt != ts else 1.0, -1, False))
         names.append("peak")
 
-        sol = solve_ivp(rhs, (t, t_end), (phi, phid), method=settings.method,
-                        rtol=settings.rtol, atol=settings.atol, events=evs, dense_output=True)
+        try:
+            sol = solve_ivp(rhs, (t, t_end), (phi, phid), method=settings.method,
+                            rtol=settings.rtol, atol=settings.atol, events=evs, dense_output=True)
+        except (ValueError, ArithmeticError, RuntimeError) as exc:
+            status = "invalid"
+            reason = f"integration failed at t = {t:.9g} s: {type(exc).__name__}: {exc}"
+            break
         steps += max(len(sol.t) - 1, 0)
         nfev += sol.nfev
         if sol.status < 0:
-            raise RuntimeError(f"solve_ivp failed at t={sol.t[-1]:.6g}: {sol.message}")
+            status = "invalid"
+            reason = f"solve_ivp failed at t = {sol.t[-1]:.9g} s: {sol.message}"
+            break
         t1 = float(sol.t[-1])
         y1 = sol.y[:, -1]
         max_abs = max(max_abs, float(np.max(np.abs(sol.y[0]))))
@@ -253,13 +317,21 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
             after = e * phid
             # eta <= 0 (possible for squat asymmetric frames): the post-impact mechanism cannot
             # start, the impact is perfectly plastic and the structure comes to rest
-            new_mode = post if (e > 0.0 and abs(after) > v_rest) else 0
+            settles = e <= 0.0 or abs(after) <= v_rest
+            # chatter (rules.py): two successive small post-impact velocities, close in time
+            if (not settles and last_impact is not None and abs(after) <= v_chat
+                    and last_impact[1] <= v_chat and t - last_impact[0] <= dt_chat):
+                settles = True
+            new_mode = 0 if settles else post
             rows.append(dict(t=t, kind="impact", phi=0.0, phidot_before=phid, phidot_after=after,
                              eta=e, direction=new_mode))
             if new_mode == 0:
                 after = 0.0
+                last_impact = None
                 rows.append(dict(t=t, kind="rest", phi=0.0, phidot_before=phid * e,
                                  phidot_after=0.0, eta=math.nan, direction=0))
+            else:
+                last_impact = (t, abs(after))
             phid, mode = after, new_mode
         elif kind == "overturn":
             overturned, t_over = True, t
@@ -271,7 +343,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
                              phidot_after=phid, eta=math.nan, direction=s))
     wall = time.perf_counter() - wall0
 
-    if overturned or not segments:
+    if overturned or not segments or status != "ok":
         t_end = t
     history = _history(ref, mot, segments, t0, t_end, settings)
     events = events_frame(sorted(rows, key=lambda r: r["t"]))
@@ -282,7 +354,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         max_abs_phi=max_abs, max_abs_phi_over_alpha=max_abs / ref.alpha, overturned=overturned,
         t_overturn=t_over, exceeded_critical=exceeded or overturned, uplifted=uplifted,
         t_uplift=float(ups["t"].iloc[0]) if len(ups) else (t0 if uplifted else None),
-        n_impacts=n_imp, fractured=fractured, t_fracture=t_frac)
+        n_impacts=n_imp, fractured=fractured, t_fracture=t_frac, status=status, reason=reason)
     cost = Cost(wall_s=wall, sim_time=t_end - t0, steps=steps, rhs_calls=nfev)
     return Result(backend="analytic", scene=scene, motion=mot.describe(), history=history,
                   events=events, summary=summary, cost=cost, settings=asdict(settings))

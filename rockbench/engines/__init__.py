@@ -16,6 +16,7 @@ REGISTRY: dict[str, str] = {
     "pymunk": "rockbench.engines.pymunk:PymunkBackend",
     "mujoco": "rockbench.engines.mujoco:MujocoBackend",
     "pybullet": "rockbench.engines.pybullet:PybulletBackend",
+    "opensees": "rockbench.engines.opensees:OpenseesBackend",
 }
 
 __all__ = ["REGISTRY", "get_backend", "backend_names", "available_backends", "engine_info"]

@@ -125,24 +125,58 @@ def _replace(settings, overrides: dict[str, Any]):
     return type(settings)(**vals)
 
 
-def run_window(scene: Scene, motion, duration: float | None, phi0: float) -> tuple[float, float]:
+def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
+               settings: Any = None) -> tuple[float, float]:
     """Validate a run's time window and initial rotation; return (t0, t_end) [s].
 
     Shared by every backend so that they all start and stop at the same times: from the motion's
     ``t_start`` (-3 T_g for a Ricker pulse) or 0 for free rocking, for ``duration`` seconds
     (default: the motion's length + 10 s, or 10 s of free rocking).
+
+    ``motion`` must be a :class:`~rockbench.scene.motion.GroundMotion` or None; ``phi0`` [rad]
+    must be below the fall angle of its own direction (``scene.fall_angles[sign(phi0)]``).
+    With the backend's ``settings``, the run's size is estimated before anything is allocated:
+    history samples = duration / ``settings.output_dt`` and, for a backend with a time step,
+    engine steps = duration / ``settings.dt`` must be within the limits ``max_samples`` and
+    ``max_steps`` of :mod:`rockbench.limits` (the error names the override).
     """
+    from ..errors import check_finite
+    from ..limits import check_size
+    from ..scene.motion import GroundMotion
+
+    if motion is not None and not isinstance(motion, GroundMotion):
+        shown_motion = f"{motion!r}"[:60] + f" ({type(motion).__name__})"
+        raise ParameterError("motion", shown_motion,
+                             "a GroundMotion (RickerPulse, Record) or None for free rocking")
     t0 = float(motion.t_start) if motion is not None else 0.0
+    given = duration is not None
     if duration is None:
         duration = (max(motion.t_end - t0, 0.0) if motion is not None else 0.0) + 10.0
     duration = check_positive("duration", duration)
-    if not math.isfinite(float(phi0)):
-        raise ParameterError("phi0", phi0, "a finite number [rad]")
-    fall = min(scene.fall_angles.values())
-    if abs(phi0) >= fall:
-        raise ParameterError("phi0", phi0, f"|phi0| < fall angle {fall:.4g} rad")
+    phi0 = check_finite("phi0", phi0)
+    if phi0 != 0.0:
+        sign = 1 if phi0 > 0 else -1
+        fall = scene.fall_angles[sign]
+        if abs(phi0) >= fall:
+            way = "counterclockwise" if sign == 1 else "clockwise"
+            raise ParameterError("phi0", phi0,
+                                 f"|phi0| < the {way} fall angle {fall:.4g} rad "
+                                 f"(= {fall / scene.alpha:.4g} alpha)")
     if motion is None and phi0 == 0.0:
         raise ParameterError("phi0", phi0, "non-zero for a free-rocking run (no ground motion)")
+    if settings is not None:
+        shown: Any = duration if given else (f"{duration:g} s (the default: the motion's "
+                                             f"{duration - 10.0:g} s + 10 s)")
+        output_dt = getattr(settings, "output_dt", None)
+        if isinstance(output_dt, (int, float)) and output_dt > 0:
+            n = duration / output_dt
+            check_size("max_samples", "duration", shown, n,
+                       f"history samples (duration / output_dt = {duration:g} s / "
+                       f"{output_dt:g} s)")
+        dt = getattr(settings, "dt", None)
+        if isinstance(dt, (int, float)) and dt > 0:
+            check_size("max_steps", "duration", shown, duration / dt,
+                       f"engine steps (duration / dt = {duration:g} s / {dt:g} s)")
     return t0, t0 + duration
 
 
@@ -151,11 +185,12 @@ class EngineSettings:
     """Settings every engine has (adapters subclass this and add their own).
 
     dt : engine time step [s], in [1e-6, 1e-2].
-    output_dt : history sampling interval [s] (>= dt), the same grid as the analytic backend.
+    output_dt : history sampling interval [s] (>= dt, and in [1e-5, 1] s: limit ``output_dt`` of
+        :mod:`rockbench.limits`), the same grid as the analytic backend.
     friction : Coulomb friction coefficient of every contact pair (the value the pair gets,
         whatever the engine's combination rule), > 0.
     uplift_tol : |phi| / alpha above which the structure counts as uplifted (engine contacts
-        are never perfectly rigid) [-].
+        are never perfectly rigid) [-], in (0, 1).
     max_penetration, max_sliding : a run whose contacts penetrate or slide more than this [m]
         is reported ``diverged``.
     energy_gain_tol : relative growth of mechanical energy without input (free rocking) that
@@ -177,11 +212,18 @@ class EngineSettings:
         od = check_positive("output_dt", self.output_dt)
         if od < dt * (1 - 1e-9):
             raise ParameterError("output_dt", self.output_dt, f">= dt = {dt:g} s")
+        from ..limits import check_in_limit
+        check_in_limit("output_dt", "output_dt", od)  # [1e-5, 1] s unless overridden
         check_positive("friction", self.friction)
-        check_positive("uplift_tol", self.uplift_tol)
+        if check_positive("uplift_tol", self.uplift_tol) >= 1.0:
+            raise ParameterError("uplift_tol", self.uplift_tol, "in (0, 1) (|phi| / alpha)")
         check_positive("max_penetration", self.max_penetration)
         check_positive("max_sliding", self.max_sliding)
         check_positive("energy_gain_tol", self.energy_gain_tol)
+        # store plain floats (a numeric string or numpy scalar passes float(); keep no string)
+        for name in ("dt", "output_dt", "friction", "uplift_tol", "max_penetration",
+                     "max_sliding", "energy_gain_tol"):
+            object.__setattr__(self, name, float(getattr(self, name)))
 
 
 class EngineBackend(Backend):

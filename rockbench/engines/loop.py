@@ -41,7 +41,7 @@ from ..scene.scene import Scene
 from ..scene.structure import Frame
 from .bodies import BodySpec
 from .contacts import ContactProbe
-from .devices import DAMPER_MODELS, DeviceGeometry, PointForce
+from .devices import DAMPER_MODELS, DeviceGeometry
 
 __all__ = ["Stepped", "step_run", "finish", "PROBE_CHUNK"]
 
@@ -98,18 +98,25 @@ def device_geometry(backend) -> DeviceGeometry | None:
 def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     """Step ``backend`` (an :class:`~rockbench.engines.base.EngineBackend` whose ``specs``,
     ``foundation`` and ``poses0`` are set) from ``t0`` to ``t_end`` [s] under ``motion`` (None:
-    free rocking from ``phi0`` [rad]); never raises for an engine failure (status "diverged")."""
+    free rocking from ``phi0`` [rad]); never raises for an engine failure (status "diverged").
+
+    Per step the loop does only what the scene requires: the ground motion's gravity
+    (precomputed for every step), device forces and the fracture check only while a scene's
+    devices are intact, the overturn check, the engine step and the state read. Samples go into
+    a preallocated array; the checks that need no per-step resolution (non-finite state,
+    energy growth in free rocking, contact violations) run on the samples, in chunks of
+    :data:`PROBE_CHUNK` (vectorized), and report the first offending sample.
+    """
     scene, cfg = backend.scene, backend.settings
     specs = backend.specs
-    alpha = scene.alpha
-    fall = scene.fall_angles
-    acc = motion.acceleration if motion is not None else None
+    nb = len(specs)
+    fall_p, fall_n = scene.fall_angles[1], scene.fall_angles[-1]
     devices = device_geometry(backend)
     native = bool(backend.native_devices)
     intact = devices is not None
     check_strain = devices is not None and devices.eps_f is not None
     probe = ContactProbe(scene, specs)
-    uplift_phi = cfg.uplift_tol * alpha
+    uplift_phi = cfg.uplift_tol * scene.alpha
     crit = reference_of(scene).critical
 
     dt = cfg.dt
@@ -117,58 +124,62 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     n_out = grid.size
     n_steps = int(math.ceil((t_end - t0) / dt - 1e-9))
     t_tol = 1e-9 * dt
-    samples: list[np.ndarray] = []     # body states on the output grid
-    sample_intact: list[bool] = []
+    # the time of every step's start, as the loop has always computed it (t0 + k dt), and the
+    # ground motion's gravity at the step's midpoint, in one vectorized call
+    t_steps = t0 + np.arange(1, n_steps + 1) * dt
+    if motion is not None and n_steps:
+        t_mid = np.concatenate(([t0], t_steps[:-1])) + 0.5 * dt
+        gx = (-np.asarray(motion.acceleration(t_mid), dtype=float)).tolist()
+    else:
+        gx = [0.0] * n_steps
+    t_steps = t_steps.tolist()
+    states = np.empty((n_out, nb, 6))
+    sample_intact = np.zeros(n_out, dtype=bool)
     native_report: list[tuple] = []
-    out = Stepped(grid=grid, states=np.zeros((0, len(specs), 6)), intact=np.zeros(0, bool))
-    checked = 0                        # samples already probed for penetration / sliding
-    energy0 = None
-    free = motion is None and devices is None
-    prev_t, prev = None, None
+    out = Stepped(grid=grid, states=states[:0], intact=sample_intact[:0])
+    checker = _SampleChecks(cfg, specs, probe, crit, uplift_phi,
+                            free=motion is None and devices is None)
+    n = 0                              # samples written
+    no_forces: tuple = ()
     backend.steps = 0
     backend.wall_s = 0.0
+    step = backend._step
+    read = backend._state
+    clock = time.perf_counter
     try:
         backend._build()
-        state = np.array(backend._state(), dtype=float)
+        state = np.array(read(), dtype=float)
+        prev_t, prev = None, None
         t = t0
         for k in range(n_steps + 1):
-            if not np.all(np.isfinite(state)):
+            phi = state[0, 2]
+            if phi != phi:
                 raise Diverged(f"non-finite body state at t={t:.6g} s")
             # output samples on the fixed grid (linear interpolation between steps)
-            while len(samples) < n_out and grid[len(samples)] <= t + t_tol:
+            while n < n_out and grid[n] <= t + t_tol:
                 if prev is None or t == prev_t:
-                    samples.append(state)
+                    states[n] = state
                 else:
-                    w = (grid[len(samples)] - prev_t) / (t - prev_t)
-                    samples.append(prev + w * (state - prev))
-                sample_intact.append(intact)
+                    w = (grid[n] - prev_t) / (t - prev_t)
+                    states[n] = prev + w * (state - prev)
+                sample_intact[n] = intact
                 if native:
                     native_report.append(
-                        backend._native_device_report(devices, samples[-1],
-                                                      devices.elongations(samples[-1]))
-                        if intact and devices is not None else ([0.0, 0.0], [0.0, 0.0]))
-            if len(samples) - checked >= PROBE_CHUNK:
-                out.max_penetration, out.max_sliding = _check_contacts(
-                    cfg, probe, samples, sample_intact, crit, checked, uplift_phi,
-                    out.max_penetration, out.max_sliding)
-                checked = len(samples)
-            phi = state[0, 2]
-            if abs(phi) >= fall[1 if phi > 0 else -1]:
+                        backend._native_device_report(devices, states[n],
+                                                      devices.elongations(states[n]))
+                        if intact else ([0.0, 0.0], [0.0, 0.0]))
+                n += 1
+                if n - checker.checked >= PROBE_CHUNK:
+                    checker.check(states, sample_intact, grid, n, out)
+            if phi >= fall_p or -phi >= fall_n:
                 out.overturned, out.t_overturn = True, t
                 out.events.append(dict(t=t, kind="overturn", phi=phi,
                                        phidot_before=state[0, 5], phidot_after=state[0, 5],
                                        direction=1 if phi > 0 else -1))
                 break
-            if free:
-                e = _mech_energy(specs, state)
-                if energy0 is None:
-                    energy0 = max(e, 1e-300)
-                elif e > energy0 * (1 + cfg.energy_gain_tol):
-                    raise Diverged(f"mechanical energy grew by {100 * (e / energy0 - 1):.2f} % "
-                                   f"without input (t={t:.4g} s)")
             if k == n_steps:
                 break
-            forces: list[PointForce] = []
+            forces = no_forces
             if intact:
                 if native:
                     el = devices.elongations(state) if check_strain else None
@@ -176,7 +187,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
                     forces = devices.forces(state)[0]
                     el = devices.last_elongations
                 if check_strain and max(el) / devices.l >= devices.eps_f:
-                    forces = []
+                    forces = no_forces
                     intact = False
                     out.fractured, out.t_fracture = True, t
                     out.events.append(dict(t=t, kind="fracture", phi=phi,
@@ -185,17 +196,14 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
                                            direction=1 if phi > 0 else -1))
                     if native:
                         backend._remove_devices()
-            g_x = -float(acc(t + 0.5 * dt)) if acc is not None else 0.0
-            ts = time.perf_counter()
-            backend._step(g_x, forces)
-            backend.wall_s += time.perf_counter() - ts
+            ts = clock()
+            step(gx[k], forces)
+            backend.wall_s += clock() - ts
             backend.steps += 1
             prev_t, prev = t, state
-            t = t0 + (k + 1) * dt
-            state = np.array(backend._state(), dtype=float)
-        out.max_penetration, out.max_sliding = _check_contacts(
-            cfg, probe, samples, sample_intact, crit, checked, uplift_phi, out.max_penetration,
-            out.max_sliding)
+            t = t_steps[k]
+            state = np.array(read(), dtype=float)
+        checker.check(states, sample_intact, grid, n, out)
     except Diverged as e:
         out.status, out.reason = "diverged", str(e)
     except Exception as e:  # engine failure at the adapter boundary
@@ -205,11 +213,78 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
             backend._close()
         except Exception:
             pass
-    out.states = np.array(samples, dtype=float).reshape(len(samples), len(specs), 6)
-    out.intact = np.array(sample_intact, dtype=bool)
-    out.native_report = native_report if native else None
+    if out.status != "ok" and checker.stop_at is not None:
+        n = min(n, checker.stop_at)     # the history ends at the first offending sample
+    out.states = states[:n]
+    out.intact = sample_intact[:n]
+    out.native_report = native_report[:n] if native else None
+    out.max_penetration, out.max_sliding = checker.max_pen, checker.max_slide
     out.steps, out.wall_s = backend.steps, backend.wall_s
     return out
+
+
+class _SampleChecks:
+    """The divergence checks that run on the output samples, in vectorized chunks: a
+    non-finite state, mechanical energy growing without input (free rocking), contact
+    penetration or sliding beyond the settings' tolerances (samples past the critical angle
+    are held to 10 x the tolerances only: whether their violations count is decided by
+    :func:`finish`, they do unless the run overturns). Each raises :class:`Diverged` naming the
+    first offending sample."""
+
+    def __init__(self, cfg, specs, probe, crit, uplift_phi, *, free: bool):
+        self.cfg, self.probe, self.crit, self.uplift_phi = cfg, probe, crit, uplift_phi
+        self.free = free
+        self.mass = np.array([sp.mass for sp in specs])
+        self.inertia = np.array([sp.inertia for sp in specs])
+        self.y0 = np.array([sp.y for sp in specs])
+        self.checked = 0
+        self.energy0 = None
+        self.max_pen = self.max_slide = 0.0
+        self.stop_at = None
+
+    def _fail(self, i: int, message: str):
+        self.stop_at = i
+        raise Diverged(message)
+
+    def check(self, states, intact, grid, n: int, out) -> None:
+        start, cfg = self.checked, self.cfg
+        self.checked = n
+        if n <= start:
+            return
+        S = states[start:n]
+        bad = ~np.isfinite(S).all(axis=(1, 2))
+        if bad.any():
+            i = int(np.argmax(bad))
+            self._fail(start + i, f"non-finite body state at t={grid[start + i]:.6g} s")
+        if self.free:
+            e = (0.5 * (self.mass * (S[:, :, 3] ** 2 + S[:, :, 4] ** 2)
+                        + self.inertia * S[:, :, 5] ** 2).sum(axis=1)
+                 + G * (self.mass * (S[:, :, 1] - self.y0)).sum(axis=1))
+            if self.energy0 is None:
+                self.energy0 = max(float(e[0]), 1e-300)
+            grew = e > self.energy0 * (1 + cfg.energy_gain_tol)
+            if grew.any():
+                i = int(np.argmax(grew))
+                self._fail(start + i, f"mechanical energy grew by "
+                                      f"{100 * (e[i] / self.energy0 - 1):.2f} % without input "
+                                      f"(t={grid[start + i]:.4g} s)")
+        ph = S[:, 0, 2]
+        modes = np.where(np.abs(ph) <= self.uplift_phi, 0, np.sign(ph))
+        pen, sl, _ = self.probe.measure_many(S, modes)
+        falling = _falling(ph, intact[start:n], self.crit)
+        self.max_pen = max(self.max_pen, float(pen[~falling].max(initial=0.0)))
+        self.max_slide = max(self.max_slide, float(sl[~falling].max(initial=0.0)))
+        fpen = float(pen[falling].max(initial=0.0))
+        fsl = float(sl[falling].max(initial=0.0))
+        if fpen > 10 * cfg.max_penetration or fsl > 10 * cfg.max_sliding:
+            raise Diverged(f"while falling: penetration {fpen:.3g} m, sliding {fsl:.3g} m "
+                           f"> 10 x max_penetration / max_sliding")
+        if self.max_pen > cfg.max_penetration:
+            raise Diverged(f"penetration {self.max_pen:.3g} m > max_penetration "
+                           f"{cfg.max_penetration:g} m")
+        if self.max_slide > cfg.max_sliding:
+            raise Diverged(f"sliding {self.max_slide:.3g} m > max_sliding "
+                           f"{cfg.max_sliding:g} m")
 
 
 def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepped, *,
@@ -312,34 +387,6 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                   settings=out_settings)
 
 
-# ------------------------------------------------------------------------------------------
-def _check_contacts(cfg, probe: ContactProbe, samples: list, intact: list, crit: dict,
-                    start: int, uplift_phi: float, max_pen: float, max_slide: float
-                    ) -> tuple[float, float]:
-    """Probe samples[start:] (vectorized); raise Diverged beyond the tolerances. Samples past
-    the critical angle (falling) are held to 10 x the tolerances only: whether their violations
-    count is decided at the end of the run (they do unless it overturns)."""
-    if len(samples) > start:
-        S = np.array(samples[start:], dtype=float)
-        ph = S[:, 0, 2]
-        modes = np.where(np.abs(ph) <= uplift_phi, 0, np.sign(ph))
-        pen, sl, _ = probe.measure_many(S, modes)
-        falling = _falling(ph, np.array(intact[start:len(samples)], bool), crit)
-        max_pen = max(max_pen, float(pen[~falling].max(initial=0.0)))
-        max_slide = max(max_slide, float(sl[~falling].max(initial=0.0)))
-        fpen = float(pen[falling].max(initial=0.0))
-        fsl = float(sl[falling].max(initial=0.0))
-        if fpen > 10 * cfg.max_penetration or fsl > 10 * cfg.max_sliding:
-            raise Diverged(f"while falling: penetration {fpen:.3g} m, sliding {fsl:.3g} m "
-                           f"> 10 x max_penetration / max_sliding")
-    if max_pen > cfg.max_penetration:
-        raise Diverged(f"penetration {max_pen:.3g} m > max_penetration "
-                       f"{cfg.max_penetration:g} m")
-    if max_slide > cfg.max_sliding:
-        raise Diverged(f"sliding {max_slide:.3g} m > max_sliding {cfg.max_sliding:g} m")
-    return max_pen, max_slide
-
-
 def _history(scene: Scene, motion, t: np.ndarray, S: np.ndarray, modes: np.ndarray,
              intact: np.ndarray, devices: DeviceGeometry | None, native_report: list | None,
              pen: np.ndarray, sl: np.ndarray) -> pd.DataFrame:
@@ -397,15 +444,6 @@ def _peak_energy_growth(exc: list, t: np.ndarray, phi: np.ndarray, intact: np.nd
                     f"{prev[0]:.4g} J")
         prev = (V, float(t[x.ipk]))
     return None
-
-
-def _mech_energy(specs: list[BodySpec], state: np.ndarray) -> float:
-    """Kinetic + gravitational energy [J] of the bodies, relative to the rest configuration."""
-    e = 0.0
-    for sp, st in zip(specs, state):
-        e += 0.5 * sp.mass * (st[3] ** 2 + st[4] ** 2) + 0.5 * sp.inertia * st[5] ** 2
-        e += sp.mass * G * (st[1] - sp.y)
-    return e
 
 
 def _falling(phi: np.ndarray, intact: np.ndarray, crit: dict) -> np.ndarray:

@@ -11,8 +11,8 @@ campaign's tables documented in ``docs/report.md``) and :class:`rockbench.result
 alpha the slenderness of the taller column [rad], eta [-], real-time factor [-] (simulated s per
 wall s), A = a_g / (g tan alpha) [-], W = omega_g / p [-].
 
-Agreement colours (:data:`THRESHOLDS`, :func:`grade`) are shared with the HTML tables; the
-thresholds are stated in ``docs/report.md``.
+Agreement colours (:func:`grade`, from ``rockbench.compare.TOLERANCES["grades"]``) are shared
+with the HTML tables; the thresholds are stated in ``docs/report.md``.
 """
 
 from __future__ import annotations
@@ -29,9 +29,10 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from ..compare import TOLERANCES
+
 __all__ = [
     "GRADE_COLORS",
-    "THRESHOLDS",
     "Trace",
     "as_trace",
     "data_uri",
@@ -51,21 +52,9 @@ __all__ = [
 # ------------------------------------------------------------------------------------------
 # Agreement grades
 # ------------------------------------------------------------------------------------------
-#: metric -> (good limit, fair limit) on the metric's absolute value: |x| <= good is "good"
-#: (green), <= fair is "fair" (amber), larger is "poor" (red). Units: see docs/report.md.
-#: The "good" limits of nrmse, peak and eta equal rockbench.testing.assert_agree's defaults
-#: (nrmse 0.005 is tightened there; a whole-run history that drifts in phase by a few percent
-#: of a rocking cycle already gives 0.01-0.05, hence the wider "good" here).
-THRESHOLDS: dict[str, tuple[float, float]] = {
-    "nrmse": (0.01, 0.05),                    # -, RMS of (phi - phi_ref) / alpha
-    "max_abs_error_over_alpha": (0.05, 0.2),  # -, max |phi - phi_ref| / alpha
-    "peak_rel_error": (0.03, 0.10),           # -, max|phi| / max|phi_ref| - 1
-    "eta_mean_rel_error": (0.005, 0.02),      # -, max over directions |mean eta / eta_ref - 1|
-    "eta_max_rel_error": (0.005, 0.02),       # -, max over impacts |eta / eta_ref - 1|
-    "t_first_impact_error": (0.01, 0.05),     # s
-    "max_penetration": (1e-3, 5e-3),          # m
-    "max_sliding": (1e-3, 1e-2),              # m
-}
+#: metric -> (good limit, fair limit) on the metric's absolute value: the one tolerance table's
+#: "grades" entry (its comment says how they were chosen).
+_GRADES: dict[str, tuple[float, float]] = TOLERANCES["grades"]
 
 #: Boolean metrics: value -> grade.
 _BOOL_GRADES: dict[str, dict[bool, str]] = {
@@ -90,7 +79,7 @@ def grade(metric: str, value: Any) -> str:
         if value is None or (isinstance(value, float) and math.isnan(value)):
             return "na"
         return _BOOL_GRADES[metric].get(bool(value), "na")
-    if metric not in THRESHOLDS:
+    if metric not in _GRADES:
         return "na"
     try:
         x = abs(float(value))
@@ -98,7 +87,7 @@ def grade(metric: str, value: Any) -> str:
         return "na"
     if math.isnan(x):
         return "na"
-    good, fair = THRESHOLDS[metric]
+    good, fair = _GRADES[metric]
     return "good" if x <= good else ("fair" if x <= fair else "poor")
 
 
@@ -366,7 +355,7 @@ def plot_eta_summary(summary: pd.DataFrame, *, title: str | None = None) -> Figu
                 es.append(100.0 * float(r["eta_std"].iloc[0]) / ref)
             ax.errorbar(xs, ys, yerr=es, fmt="o", capsize=3, color=engine_color(name),
                         label=name)
-        good, fair = THRESHOLDS["eta_mean_rel_error"]
+        good, fair = _GRADES["eta_mean_rel_error"]
         ax.axhspan(-100 * good, 100 * good, color=GRADE_COLORS["good"], zorder=0)
         ax.axhline(0.0, color="k", lw=1.0)
         ax.set_ylabel("eta / eta_analytic - 1 [%]")
@@ -500,8 +489,8 @@ def plot_speed_accuracy(df: pd.DataFrame, *, error: str = "nrmse",
         ax.set_yscale("log")
         ax.set_xlabel(xlabels.get(speed, speed) + "\n(simulated s per wall-clock s; right = "
                       "faster)")
-        if error in THRESHOLDS:
-            good, fair = THRESHOLDS[error]
+        if error in _GRADES:
+            good, fair = _GRADES[error]
             ax.axhline(good, color="#2e7d32", lw=0.8, ls="--", label=f"good <= {good:g}")
             ax.axhline(fair, color="#ef6c00", lw=0.8, ls="--", label=f"fair <= {fair:g}")
         ax.grid(True, which="both", lw=0.3, alpha=0.5)

@@ -21,12 +21,14 @@ from __future__ import annotations
 import abc
 import bisect
 import math
+import os
 from typing import Any
 
 import numpy as np
 
 from ..constants import G, G_STANDARD
 from ..errors import ParameterError, check_finite, check_positive
+from ..limits import check_in_limit
 from ..result import motion_label
 
 __all__ = [
@@ -225,16 +227,17 @@ class RickerPulse(GroundMotion):
     Parameters
     ----------
     amplitude : float
-        a_g > 0 [m/s^2], the maximum of |u_g''|.
+        a_g > 0 [m/s^2], the maximum of |u_g''|; at most 1e4 m/s^2 (limit ``amplitude`` of
+        :mod:`rockbench.limits`).
     period : float
-        T_g > 0 [s].
+        T_g > 0 [s], in [1e-4, 1e4] s (limit ``period``).
     shape : {"symmetric", "antisymmetric"}
     sign : {+1, -1}
     """
 
     def __init__(self, amplitude: float, period: float, shape: str = "symmetric", sign: int = 1):
-        self._amplitude = check_positive("amplitude", amplitude)
-        self._period = check_positive("period", period)
+        self._amplitude = check_in_limit("amplitude", "amplitude", amplitude)
+        self._period = check_in_limit("period", "period", period)
         self._shape = _check_shape(shape)
         self._sign = _check_sign(sign)
         self._dimensionless: dict[str, float] | None = None
@@ -256,10 +259,12 @@ class RickerPulse(GroundMotion):
 
         ``A = a_g / (g tan alpha)`` > 0 and ``W = omega_g / p`` > 0 with ``alpha`` [rad] and ``p``
         [rad/s] of ``structure`` (the taller column of a frame), g = :data:`rockbench.constants.G`:
-        a_g = A g tan(alpha) [m/s^2] and T_g = 2 pi / (W p) [s].
+        a_g = A g tan(alpha) [m/s^2] and T_g = 2 pi / (W p) [s]. A is at most 100 and W in
+        [0.01, 1000] (limits ``A`` and ``W`` of :mod:`rockbench.limits`; the paper's maps use
+        A up to ~20 and W 0.3-50).
         """
-        A = check_positive("A", A)
-        W = check_positive("W", W)
+        A = check_in_limit("A", "A", A)
+        W = check_in_limit("W", "W", W)
         try:
             alpha, p = float(structure.alpha), float(structure.p)
         except (AttributeError, TypeError, ValueError):
@@ -321,13 +326,20 @@ class RickerPulse(GroundMotion):
         return float(out) if out.ndim == 0 else out
 
     def knots(self, t0: float, t1: float) -> np.ndarray:
-        """Uniform grid of spacing <= T_g / 400 from ``t0`` to ``t1`` [s] (both included), with the
-        pulse's extrema inside (t0, t1) added so that u_g'' is strictly monotonic between knots."""
+        """``t0``, ``t1`` [s], a uniform grid of spacing <= T_g / 400 over the part of
+        [t0, t1] inside the pulse window [-3 T_g, 3 T_g], and the pulse's extrema inside
+        (t0, t1), so that u_g'' is strictly monotonic between knots. Outside the window the
+        wavelet has no extremum (all lie within 0.7 T_g of t = 0), so at most 2400 grid knots
+        are returned whatever the interval's length (a long run of a short pulse stays cheap).
+        """
         t0, t1 = _check_interval(t0, t1)
-        n = max(1, math.ceil((t1 - t0) * _KNOTS_PER_PERIOD / self._period))
-        grid = np.linspace(t0, t1, n + 1)
-        inside = self._extrema[(self._extrema > t0) & (self._extrema < t1)]
-        return np.unique(np.concatenate([grid, inside]))
+        parts = [np.array([t0, t1])]
+        a, b = max(t0, self.t_start), min(t1, self.t_end)
+        if a < b:
+            n = max(1, math.ceil((b - a) * _KNOTS_PER_PERIOD / self._period))
+            parts.append(np.linspace(a, b, n + 1))
+        parts.append(self._extrema[(self._extrema > t0) & (self._extrema < t1)])
+        return np.unique(np.concatenate(parts))
 
     def max_abs_after(self, t: float) -> float:
         """sup |u_g''| over [t, inf) [m/s^2], exact: the larger of |u_g''(t)| and |u_g''| at the
@@ -426,6 +438,8 @@ def motion_from_spec(spec: dict[str, Any] | None, structure: Any = None) -> Grou
                           amplitude=spec.get("amplitude"), period=spec.get("period"))
     if kind == "record":
         from .records import load_record
+        if not isinstance(spec.get("path"), (str, os.PathLike)):
+            raise ParameterError("motion.path", spec.get("path"), "the path of a record file")
         return load_record(spec["path"], dt=spec.get("dt"), units=spec.get("units"),
                            scale=spec.get("scale", 1.0))
     raise ParameterError("motion.kind", kind, "one of ricker, record, none")

@@ -9,7 +9,14 @@ Two formats (see ``shared/records/PROVENANCE.md``):
   :data:`rockbench.constants.G_STANDARD` so published PGAs are reproduced.
 * Headerless columns (:func:`load_columns`): whitespace-separated samples, any number per line,
   read row-major (e.g. the SAC ``LA*.dat`` files, 6 per line, cm/s^2); the time step and units
-  are given by the caller.
+  are given by the caller. A file of two numbers per line whose first column is a time column
+  (``t a``) is recognised and read as times and accelerations; its times must increase
+  uniformly with the given time step (see :func:`load_columns`).
+
+Shape checks (``docs/errors.md``): a file must be a regular file of at most
+``ROCKBENCH_RECORD_BYTES`` (:mod:`rockbench.limits`, 100 MB); the AT2 header count NPTS must
+equal the number of values; :func:`load_record` refuses a time step outside (1e-4, 0.1) s
+(limit ``record_dt``).
 
 :func:`load_record` picks the loader from the file suffix. Every failure raises
 :class:`~rockbench.errors.RecordError` naming the file (and the line, for a bad value) or
@@ -28,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, RecordError, check_finite, check_positive
+from ..limits import check_in_limit, limit, override_hint
 from .motion import Record, unit_factor
 
 __all__ = ["load_at2", "load_columns", "load_record", "find_records", "listed_metadata"]
@@ -79,12 +87,29 @@ def load_columns(path: str | os.PathLike, *, dt: float, units: str, t0: float = 
     row-major) with time step ``dt`` > 0 [s], first sample at ``t0`` [s], in ``units``
     ("g", "m/s2" or "cm/s2"). Blank lines and lines starting with ``#`` are skipped.
     ``name`` defaults to the file stem.
+
+    A file of exactly two numbers on every line (at least 3 lines) whose first column looks
+    like time is a ``t a`` file: first column times [s], second accelerations. Its times must
+    be strictly increasing and uniformly spaced (each within 1 % of ``dt`` of the grid
+    ``t[0] + k dt``) with a spacing equal to ``dt`` (to 0.1 %); the record then starts at
+    ``t[0]`` (``t0`` is not used). Otherwise :class:`RecordError` names the line. A first
+    column "looks like time" if it is strictly increasing with nearly constant steps, or, once
+    sorted, has equal non-zero steps (shuffled times), or is non-negative and mostly (80 %)
+    increasing.
     """
     dt = check_positive("dt", dt)
     t0 = check_finite("t0", t0)
     unit_factor(units)
     path, lines = _read_lines(path)
-    values = _parse_values(path, lines, 0)
+    rows = _parse_rows(path, lines, 0)
+    timed = _time_column(path, rows, dt)
+    if timed is not None:
+        times, acc = timed
+        return Record.from_samples(acc, dt, t0=float(times[0]), units=units,
+                                   name=path.stem if name is None else name,
+                                   source=f"{path.name} (t a columns, dt={dt:g} s, "
+                                          f"units={units})")
+    values = np.array([v for _, row in rows for v in row], dtype=float)
     _check_enough(path, values)
     return Record.from_samples(values, dt, t0=t0, units=units,
                                name=path.stem if name is None else name,
@@ -102,7 +127,9 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
 
     Errors name the command-line options: ``record-dt``, ``record-units``, ``record-scale``.
     For an AT2 file, ``dt`` and ``units`` may be omitted; if given they must agree with the file
-    (DT of the header, units of g).
+    (DT of the header, units of g). The time step (given or from the header) must be in
+    (1e-4, 0.1) s (limit ``record_dt`` of :mod:`rockbench.limits`, env
+    ``ROCKBENCH_RECORD_DT``).
     """
     scale = check_finite("record-scale", scale)
     if scale == 0.0:
@@ -118,6 +145,7 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
         if units is not None and units != "g":
             raise ParameterError("record-units", units, "omitted or 'g'",
                                  f"AT2 file {path.name} is in units of g")
+        check_in_limit("record_dt", f"DT of {path.name}", record.dt)
     else:
         listed = listed_metadata(path) if (dt is None or units is None) else None
         if listed is not None:        # dt and units from the records.csv beside the file
@@ -129,7 +157,7 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
         if units is None:
             raise ParameterError("record-units", None, "one of 'g', 'm/s2', 'cm/s2'",
                                  f"required for the headerless record file {path.name}")
-        dt = check_positive("record-dt", dt)
+        dt = check_in_limit("record_dt", "record-dt", dt)
         unit_factor(units, "record-units")
         record = load_columns(path, dt=dt, units=units)
     return record if scale == 1.0 else record.scaled(scale)
@@ -228,6 +256,16 @@ def _read_lines(path: str | os.PathLike) -> tuple[Path, list[str]]:
     """The file's lines; RecordError naming the file if it cannot be read or is empty."""
     path = Path(path)
     try:
+        if path.exists() and not path.is_file():
+            raise RecordError(f"record file {path} is not a regular file")
+        size = path.stat().st_size
+    except OSError as exc:
+        raise RecordError(f"cannot read record file {path}: {exc.strerror or exc}") from None
+    _, max_bytes = limit("record_bytes")
+    if size > max_bytes:
+        raise RecordError(f"record file {path} has {size} bytes, more than {max_bytes:g} "
+                          f"({override_hint('record_bytes')})")
+    try:
         text = path.read_text(encoding="ascii", errors="strict")
     except UnicodeDecodeError as exc:
         raise RecordError(f"record file {path}: not plain ASCII text (byte {exc.start})") from None
@@ -257,11 +295,19 @@ def _to_float(token: str) -> float:
 def _parse_values(path: Path, lines: list[str], start: int) -> np.ndarray:
     """All numbers on ``lines[start:]``, row-major; RecordError naming the file and 1-based line
     of the first token that is not a finite number."""
-    values: list[float] = []
+    return np.array([v for _, row in _parse_rows(path, lines, start) for v in row], dtype=float)
+
+
+def _parse_rows(path: Path, lines: list[str], start: int) -> list[tuple[int, list[float]]]:
+    """(1-based line number, numbers) of every data line of ``lines[start:]`` (blank lines and
+    ``#`` comments skipped); RecordError naming the file and line of the first token that is
+    not a finite number."""
+    rows: list[tuple[int, list[float]]] = []
     for k in range(start, len(lines)):
         line = lines[k].strip()
         if not line or line.startswith("#"):
             continue
+        row = []
         for token in line.split():
             try:
                 x = _to_float(token)
@@ -271,11 +317,90 @@ def _parse_values(path: Path, lines: list[str], start: int) -> np.ndarray:
             if not math.isfinite(x):
                 raise RecordError(f"record file {path}, line {k + 1}: value {token!r} is not "
                                   "finite")
-            values.append(x)
-    return np.array(values, dtype=float)
+            row.append(x)
+        rows.append((k + 1, row))
+    return rows
+
+
+def _time_column(path: Path, rows: list[tuple[int, list[float]]], dt: float
+                 ) -> tuple[np.ndarray, np.ndarray] | None:
+    """(times, accelerations) of a ``t a`` file, None for a file of samples; RecordError if
+    the first column looks like time but is not strictly increasing, uniform, or spaced by
+    ``dt`` [s] (rules: :func:`load_columns`)."""
+    if len(rows) < 3 or any(len(r) != 2 for _, r in rows):
+        return None
+    t = np.array([r[0] for _, r in rows])
+    a = np.array([r[1] for _, r in rows])
+    steps = np.diff(t)
+    span = float(t[-1] - t[0])
+    increasing = bool(np.all(steps > 0))
+    med = float(np.median(steps))
+    sorted_steps = np.diff(np.sort(t))
+    smed = float(np.median(sorted_steps))
+    uniform_when_sorted = smed > 0 and bool(
+        np.all(np.abs(sorted_steps - smed) <= 0.01 * smed))
+    mostly_up = bool(np.mean(steps > 0) >= 0.8) and float(t.min()) >= 0.0
+    nearly_regular = increasing and med > 0 and bool(
+        np.all(np.abs(steps - med) <= 0.5 * med))
+    if not (nearly_regular or uniform_when_sorted or mostly_up):
+        return None
+    what = f"record file {path}: two columns read as time [s] and acceleration"
+    if not increasing:
+        i = int(np.argmin(steps > 0))
+        raise RecordError(f"{what}, but the time on line {rows[i + 1][0]} ({t[i + 1]:g}) is not "
+                          f"after the time on line {rows[i][0]} ({t[i]:g}): times must "
+                          "increase (for samples only, write another number of values per "
+                          "line)")
+    step = span / (len(t) - 1)
+    off = np.abs(t - (t[0] + step * np.arange(len(t))))
+    i = int(np.argmax(off))
+    if off[i] > 0.01 * step:
+        raise RecordError(f"{what}, but the times are not uniformly spaced: line {rows[i][0]} "
+                          f"has t = {t[i]:g}, {off[i]:.3g} s off the grid of step {step:g} s")
+    if not math.isclose(step, dt, rel_tol=1e-3):
+        raise RecordError(f"{what}, but the time step of the file ({step:g} s) differs from "
+                          f"record-dt = {dt:g} s")
+    return t, a
 
 
 def _check_enough(path: Path, values: np.ndarray) -> None:
     if values.size < 2:
         raise RecordError(f"record file {path}: {values.size} acceleration value(s); "
                           "a record needs at least 2")
+
+
+# ------------------------------------------------------------------------------------------------
+# Records shipped inside the package (issue 14): rockbench/records/, provenance in its PROVENANCE.md
+def _bundled_dir() -> Path:
+    """The package-data folder of the bundled records (``rockbench/records``)."""
+    from importlib.resources import files
+
+    return Path(str(files("rockbench") / "records"))
+
+
+def bundled_records() -> list[dict[str, Any]]:
+    """The public-domain records shipped inside the package (``rockbench/records/``; why each
+    may be shipped: ``rockbench/records/PROVENANCE.md``, ``docs/records.md``), sorted by name.
+
+    Each is a dict ``name`` (file stem, the key of :func:`load_bundled`), ``path`` (absolute),
+    ``dt`` and ``units`` (None for AT2 files: their header gives them), as
+    :func:`find_records` returns them. Needs nothing outside the installed package.
+    """
+    records, _ = find_records(_bundled_dir())
+    return records
+
+
+def load_bundled(name: str) -> Record:
+    """The bundled record ``name`` (a file stem of :func:`bundled_records`, case-insensitive,
+    e.g. ``"IV1940_ElCentro_180"``) as a :class:`Record` in m/s^2. ParameterError listing the
+    bundled names for any other value."""
+    records = bundled_records()
+    key = str(name).strip().lower() if isinstance(name, str) else None
+    for r in records:
+        if key is not None and r["name"].lower() in (key, key.removesuffix(".at2")):
+            return load_record(r["path"], dt=r["dt"], units=r["units"])
+    raise ParameterError("name", name, "one of the bundled records: "
+                         + ", ".join(r["name"] for r in records))
+
+
+__all__ += ["bundled_records", "load_bundled"]

@@ -2,10 +2,11 @@
 
 Scenes are data: TOML files (built-in ones in ``rockbench/scenarios/``) of the form::
 
+    kind = "scene"              # optional: what the file is
     name = "paper-asymmetric-hybrid-eps1"
     version = 1
     description = "..."
-    [structure]
+    [structure]                 # required, with its type
     type = "frame"              # or "block"
     column_height_right = 5.6   # any Frame / Block parameter; omitted ones take their defaults
     [devices]                   # optional, frames only
@@ -101,11 +102,18 @@ class Scene:
 
     @cached_property
     def fall_angles(self) -> dict[int, float]:
-        """Fall angle [rad] for each rocking direction (+1, -1)."""
+        """Fall angle [rad] for each rocking direction (+1, -1): ``fall_angle`` if given, else
+        0.98 x min(pi/2, the mechanism's geometric limit) for every structure and backend.
+
+        The limit is pi/2 for a block lying flat on its side (its geometric limit is pi) and
+        the toggle of the four-bar linkage for a frame; the 2 % margin keeps the fall angle
+        clearly below the pose a body can only pass by penetrating the ground, so an engine's
+        overturn is detected before the body lands (docs/conventions.md).
+        """
         if self.fall_angle is not None:
             return {1: self.fall_angle, -1: self.fall_angle}
         from .mechanism import geometric_limit, mechanism
-        return {s: min(math.pi / 2, 0.98 * geometric_limit(mechanism(self.structure, s)))
+        return {s: 0.98 * min(math.pi / 2, geometric_limit(mechanism(self.structure, s)))
                 for s in (1, -1)}
 
     def to_dict(self) -> dict[str, Any]:
@@ -119,24 +127,54 @@ class Scene:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, source: str = "<dict>") -> "Scene":
-        """Build a validated scene from the TOML structure described in the module docstring."""
-        allowed = {"name", "version", "description", "structure", "devices", "fall_angle"}
+        """Build a validated scene from the TOML structure described in the module docstring.
+
+        A scene states what it is: the ``[structure]`` table and its ``type`` ("frame" or
+        "block") are required; ``[devices]`` is optional. Unknown or missing tables and keys,
+        and tables that are not tables, raise :class:`SceneError` naming them and ``source``.
+        """
+        if not isinstance(data, Mapping):
+            raise SceneError(f"{source}: a scene is a table of keys (name, description, "
+                             f"[structure], [devices], fall_angle), not {type(data).__name__}")
+        allowed = {"kind", "name", "version", "description", "structure", "devices",
+                   "fall_angle"}
+        if data.get("kind", "scene") != "scene":
+            raise SceneError(f"{source}: kind = {data['kind']!r}: not a scene file (a scene "
+                             "file has kind = \"scene\" or no kind)")
         unknown = set(data) - allowed
         if unknown:
             raise SceneError(f"{source}: unknown top-level key(s) {sorted(unknown)}; "
                              f"allowed: {sorted(allowed)}")
-        st = dict(data.get("structure", {}))
-        kind = st.pop("type", "frame")
-        if kind not in _STRUCTURES:
+        for key in ("name", "description"):
+            if key in data and not isinstance(data[key], str):
+                raise SceneError(f"{source}: {key} must be a string, got {data[key]!r}")
+        if "version" in data and (isinstance(data["version"], bool)
+                                  or not isinstance(data["version"], int)):
+            raise SceneError(f"{source}: version must be an integer, got {data['version']!r}")
+        devices = None
+        if data.get("devices") is not None:
+            if not isinstance(data["devices"], Mapping):
+                raise SceneError(f"{source}: [devices] must be a table of device parameters, "
+                                 f"got {data['devices']!r}")
+            dv = dict(data["devices"])
+            _check_keys(f"{source} [devices]", dv, Devices)
+            devices = Devices(**dv)
+        kinds = " or ".join(repr(k) for k in sorted(_STRUCTURES, reverse=True))
+        if "structure" not in data:
+            raise SceneError(f"{source}: no [structure] table; a scene states what it is: "
+                             f"[structure] with type = {kinds} and its parameters")
+        if not isinstance(data["structure"], Mapping):
+            raise SceneError(f"{source}: [structure] must be a table with type = {kinds}, "
+                             f"got {data['structure']!r}")
+        st = dict(data["structure"])
+        if "type" not in st:
+            raise SceneError(f"{source} [structure]: no type; give type = {kinds}")
+        kind = st.pop("type")
+        if not isinstance(kind, str) or kind not in _STRUCTURES:
             raise ParameterError("structure.type", kind, f"one of {sorted(_STRUCTURES)}")
         cls_ = _STRUCTURES[kind]
         _check_keys(f"{source} [structure]", st, cls_)
         structure = cls_(**st)
-        devices = None
-        if data.get("devices") is not None:
-            dv = dict(data["devices"])
-            _check_keys(f"{source} [devices]", dv, Devices)
-            devices = Devices(**dv)
         return cls(structure=structure, devices=devices, name=str(data.get("name", "custom")),
                    description=str(data.get("description", "")),
                    fall_angle=data.get("fall_angle"))
@@ -146,10 +184,17 @@ class Scene:
 
 
 def _check_keys(where: str, d: Mapping[str, Any], cls_) -> None:
+    """Refuse unknown keys, and values that are not numbers (a string, boolean, array, table
+    or date where a number [SI] belongs), naming the key."""
     names = {f.name for f in fields(cls_)}
     bad = set(d) - names
     if bad:
         raise SceneError(f"{where}: unknown parameter(s) {sorted(bad)}; known: {sorted(names)}")
+    for key, value in d.items():
+        if value is not None and (isinstance(value, bool)
+                                  or not isinstance(value, (int, float))):
+            raise SceneError(f"{where}: {key} = {value!r} is a {type(value).__name__}, "
+                             "not a number")
 
 
 def _scenario_dir():
@@ -157,12 +202,14 @@ def _scenario_dir():
 
 
 def builtin_scenes() -> dict[str, str]:
-    """Names of the built-in scenes mapped to their one-line descriptions."""
+    """Names of the built-in scenes mapped to their one-line descriptions (TOML files of
+    ``rockbench/scenarios`` whose ``kind`` is "scene" or absent: ``cases.toml`` is not one)."""
     out = {}
     for f in sorted(_scenario_dir().iterdir(), key=lambda p: p.name):
         if f.name.endswith(".toml"):
             data = tomllib.loads(f.read_text())
-            out[f.name[:-5]] = data.get("description", "")
+            if data.get("kind", "scene") == "scene":
+                out[f.name[:-5]] = data.get("description", "")
     return out
 
 
@@ -189,7 +236,11 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any] | None) -
         return out
     frame_keys = {f.name for f in fields(Frame)} | {f.name for f in fields(Block)} | {"type"}
     dev_keys = {f.name for f in fields(Devices)}
+    if not isinstance(overrides, Mapping):
+        raise ParameterError("overrides", overrides, "a dict of key=value scene overrides")
     for key, raw in overrides.items():
+        if not isinstance(key, str):
+            raise SceneError(f"scene override key {key!r} is not a string")
         value = _parse_value(raw) if isinstance(raw, str) else raw
         if "." in key:
             table, name = key.split(".", 1)
@@ -211,6 +262,9 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any] | None) -
                 out[name] = value
         elif table in ("structure", "devices"):
             tbl = out.get(table) or {}
+            if not isinstance(tbl, dict):
+                raise SceneError(f"[{table}] is {tbl!r}, not a table: cannot apply override "
+                                 f"{key!r}")
             if value is None and name != "fracture_strain":
                 tbl.pop(name, None)
             else:
@@ -223,11 +277,24 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any] | None) -
 
 def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene:
     """Load a built-in scene by name, or a TOML file by path, and apply ``overrides``."""
+    if not isinstance(name_or_path, (str, Path)):
+        raise ParameterError("scene", name_or_path, "a built-in scene name or a path to a "
+                             ".toml file")
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
-        if not p.is_file():
+    try:
+        is_path = p.suffix == ".toml" or p.exists()
+        is_file = is_path and p.is_file()
+    except (OSError, ValueError) as e:
+        raise SceneError(f"scene {str(name_or_path)[:80]!r} is neither a built-in scene name nor "
+                         f"a readable file: {e}") from None
+    if is_path:
+        if not is_file:
             raise SceneError(f"scene file {str(p)!r} does not exist")
-        text, source = p.read_text(), str(p)
+        try:
+            text, source = p.read_text(encoding="utf-8"), str(p)
+        except (OSError, UnicodeDecodeError) as e:
+            raise SceneError(f"cannot read scene file {str(p)!r}: "
+                             f"{getattr(e, 'strerror', None) or e}") from None
     else:
         f = _scenario_dir() / f"{name_or_path}.toml"
         if not f.is_file():

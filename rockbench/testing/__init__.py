@@ -9,8 +9,10 @@
   ``rockbench_backend`` is parametrized over the available engines, ``rockbench_reference``
   runs (and caches) the analytic reference. See ``docs/testing.md``.
 
-The names are imported on first use, so that the pytest plugin (a submodule, loaded by every
-pytest run) stays cheap to import.
+Modules: :mod:`~rockbench.testing.agree` (``assert_agree``), :mod:`~rockbench.testing.contract`
+(``check_backend`` and its ``check_*`` functions), :mod:`~rockbench.testing.plugin`. The names
+are imported on first use, so that the pytest plugin (a submodule, loaded by every pytest run)
+stays cheap to import.
 """
 
 from __future__ import annotations
@@ -19,12 +21,16 @@ from typing import Any
 
 __all__ = ["assert_agree", "check_backend", "BackendReport", "Check"]
 
+#: Public name -> the submodule that defines it.
+_HOME = {"assert_agree": "agree", "check_backend": "contract", "BackendReport": "contract",
+         "Check": "contract"}
+
 
 def __getattr__(name: str) -> Any:
-    if name in __all__:
-        from . import checks
+    if name in _HOME:
+        from importlib import import_module
 
-        return getattr(checks, name)
+        return getattr(import_module(f"{__name__}.{_HOME[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

@@ -242,7 +242,7 @@ def test_uplift_just_above_lambda_g_not_below(sign):
 def test_fall_angle_is_the_default(scene):
     for s in (1, -1):
         lim = geometric_limit(mechanism(scene.structure, s))
-        assert scene.fall_angles[s] == pytest.approx(min(math.pi / 2, 0.98 * lim), rel=1e-15)
+        assert scene.fall_angles[s] == pytest.approx(0.98 * min(math.pi / 2, lim), rel=1e-15)
         assert REF[scene.name].fall[s] == scene.fall_angles[s]
     if scene is ASYM:
         assert scene.fall_angles[1] < math.pi / 2 and scene.fall_angles[-1] < math.pi / 2

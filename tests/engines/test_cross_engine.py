@@ -1,14 +1,16 @@
 """Cross-engine consistency checks (issue 3): every registered engine, at its default settings,
 against the analytic backend on the cases of ``tests/engines/cases.py``.
 
-Bars (the same for every engine):
+Bars (the same for every engine; the values are entries of the one tolerance table,
+``rockbench.compare.TOLERANCES``, checked with the product we ship, ``assert_agree``):
 
 * free rocking from 0.5 alpha (housner-block, paper-symmetric, paper-asymmetric): every impact's
   effective eta within 0.5 % of the analytic eta of its direction, both directions present;
-  RMS of (phi - phi_analytic) / alpha over the first 2 s below 0.005;
+  RMS of (phi - phi_analytic) / alpha over the first 2 s below 0.005 (``"free_rocking"``);
 * the 16 surviving pulses (paper-asymmetric, paper-asymmetric-hybrid-eps1): max |phi| / alpha
-  within 3 % of the analytic one; the 16 overturning pulses: all overturn;
-* every run: status ok, penetration and sliding at most 2 mm;
+  within 3 % of the analytic one (``"surviving_pulse"``); the 16 overturning pulses: all
+  overturn (``"overturning_pulse"``);
+* every run: status ok, penetration and sliding at most 2 mm (``"contacts"``);
 * the Result has the analytic backend's schema; phi is the left column's rotation (the first
   sample equals phi0); two runs are identical; bad settings raise ParameterError.
 
@@ -19,25 +21,25 @@ per module (a module-scoped cache).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import cases
 import rockbench as rb
-from rockbench.scene.mechanism import mechanism
-from rockbench.analytic.reference import Reference
+from rockbench.compare import TOLERANCES
 from rockbench.engines import available_backends, get_backend
 from rockbench.errors import ParameterError
+from rockbench.scene.mechanism import mechanism
+from rockbench.testing import assert_agree
 
 ENGINES = [n for n in available_backends() if n != "analytic"]
 
 pytestmark = pytest.mark.engines
 
-ETA_RTOL = 0.005
-NRMSE_MAX = 0.005
-PEAK_RTOL = 0.03
-CONTACT_MAX = 2e-3   # m
+FREE = TOLERANCES["free_rocking"]
+CONTACTS = TOLERANCES["contacts"]
 
 ALL_CASES = cases.FREE_CASES + cases.SURVIVE_CASES + cases.OVERTURN_CASES
 
@@ -61,20 +63,28 @@ def ids(cs):
 
 
 # -----------------------------------------------------------------------------------------
+def only(tolerances: dict, *keys: str) -> dict:
+    """``tolerances`` with every check but ``keys`` turned off (None; verdict False)."""
+    return {k: (v if k in keys else (False if k == "verdict" else None))
+            for k, v in tolerances.items()}
+
+
+def first_seconds(r, seconds: float):
+    """``r`` with its history cut to the first ``seconds`` s of the run."""
+    h = r.history
+    return replace(r, history=h[h.t - h.t.iloc[0] <= seconds + 1e-9].reset_index(drop=True))
+
+
 @pytest.mark.parametrize("case", cases.FREE_CASES, ids=ids(cases.FREE_CASES))
 @pytest.mark.parametrize("engine", ENGINES)
 def test_free_rocking_eta(cache, engine, case):
-    r = run(cache, engine, case)
+    r, ref = run(cache, engine, case), run(cache, "analytic", case)
     assert r.ok, r.summary.reason
-    eta = Reference(r.scene).eta
     imp = r.impacts()
     assert set(imp.direction) == {1, -1}, f"impacts {list(imp.direction)}"
-    for _, e in imp.iterrows():
-        d = int(e.direction)
-        err = e.eta / eta[d] - 1
-        assert abs(err) <= ETA_RTOL, (f"impact at t = {e.t:.3f} s into direction {d:+d}: "
-                                      f"eta = {e.eta:.5f}, analytic {eta[d]:.5f} "
-                                      f"({100 * err:+.2f} %)")
+    # assert_agree passes over impacts whose eta could not be measured: the bar needs them all
+    assert imp.eta.notna().all(), f"unmeasured eta: {list(imp.eta)}"
+    assert_agree(r, ref, **only(FREE, "eta_rtol", "verdict"))
 
 
 @pytest.mark.parametrize("case", cases.FREE_CASES, ids=ids(cases.FREE_CASES))
@@ -83,10 +93,8 @@ def test_free_rocking_history(cache, engine, case):
     r, ref = run(cache, engine, case), run(cache, "analytic", case)
     t, tr = r.history.t.to_numpy(), ref.history.t.to_numpy()
     assert np.array_equal(t, tr), "engine and analytic histories are not on the same grid"
-    m = t - t[0] <= cases.NRMSE_WINDOW + 1e-9
-    d = (r.history.phi.to_numpy() - ref.history.phi.to_numpy())[m] / r.scene.alpha
-    nrmse = float(np.sqrt(np.mean(d * d)))
-    assert nrmse < NRMSE_MAX, f"RMS (phi - phi_analytic) / alpha over 2 s = {nrmse:.2e}"
+    window = cases.NRMSE_WINDOW
+    assert_agree(first_seconds(r, window), first_seconds(ref, window), **only(FREE, "nrmse"))
 
 
 @pytest.mark.parametrize("case", cases.SURVIVE_CASES, ids=ids(cases.SURVIVE_CASES))
@@ -96,29 +104,26 @@ def test_surviving_pulse_peak(cache, engine, case):
     peak_ref = ref.summary.max_abs_phi_over_alpha
     assert not ref.summary.overturned and 0.3 <= peak_ref <= 0.8, "not a survive case"
     r = run(cache, engine, case)
-    assert r.ok, r.summary.reason
-    assert not r.summary.overturned
-    err = r.summary.max_abs_phi_over_alpha / peak_ref - 1
-    assert abs(err) <= PEAK_RTOL, (f"max |phi| / alpha = {r.summary.max_abs_phi_over_alpha:.4f}"
-                                   f", analytic {peak_ref:.4f} ({100 * err:+.2f} %)")
+    # status ok, the same verdict (survives), max |phi| within peak_rtol of the analytic one
+    assert_agree(r, ref, **TOLERANCES["surviving_pulse"])
 
 
 @pytest.mark.parametrize("case", cases.OVERTURN_CASES, ids=ids(cases.OVERTURN_CASES))
 @pytest.mark.parametrize("engine", ENGINES)
 def test_overturning_pulse(cache, engine, case):
-    assert run(cache, "analytic", case).summary.overturned, "not an overturn case"
-    r = run(cache, engine, case)
-    assert r.ok, r.summary.reason
-    assert r.summary.overturned, (f"survived with max |phi| / alpha = "
-                                  f"{r.summary.max_abs_phi_over_alpha:.3f}")
+    ref = run(cache, "analytic", case)
+    assert ref.summary.overturned, "not an overturn case"
+    # status ok and the same verdict: it overturns too
+    assert_agree(run(cache, engine, case), ref, **TOLERANCES["overturning_pulse"])
 
 
 @pytest.mark.parametrize("case", ALL_CASES, ids=ids(ALL_CASES))
 @pytest.mark.parametrize("engine", ENGINES)
 def test_contacts_hold(cache, engine, case):
     s = run(cache, engine, case).summary
-    assert s.max_penetration <= CONTACT_MAX, f"penetration {1e3 * s.max_penetration:.2f} mm"
-    assert s.max_sliding <= CONTACT_MAX, f"sliding {1e3 * s.max_sliding:.2f} mm"
+    assert s.max_penetration <= CONTACTS["max_penetration"], \
+        f"penetration {1e3 * s.max_penetration:.2f} mm"
+    assert s.max_sliding <= CONTACTS["max_sliding"], f"sliding {1e3 * s.max_sliding:.2f} mm"
 
 
 # -----------------------------------------------------------------------------------------

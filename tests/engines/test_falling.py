@@ -4,7 +4,12 @@ Past its critical angle a frame is falling: engines let the falling bodies slide
 centimetres before the fall angle is reached. That is not a numerical failure, and the verdict
 (overturned) is what the comparison needs. Before the fix, every engine reported these runs as
 'diverged' (sliding > max_sliding) and no overturning verdict was recorded.
+
+The fall angle lies clearly below the lying-flat pose (0.98 x min(pi/2, geometric limit)), so
+every backend reports the block's and the symmetric frame's fall (issue 18).
 """
+
+import math
 
 import pytest
 
@@ -20,3 +25,37 @@ def test_overturn_with_sliding_while_falling_is_an_overturn(engine):
     assert r.summary.status == "ok", r.summary.reason
     assert r.summary.overturned
     assert r.summary.max_sliding > 0.02          # it did slide while falling, and says so
+
+
+# --- the fall angle lies clearly below the lying-flat pose (issue 18) ----------------------------
+# Before, the block's and the symmetric frame's fall angle was pi/2, the pose in which a body
+# lies flat on the ground: an engine could reach it only by penetrating the ground (pymunk never
+# did and reported a diverged, non-overturned run; MuJoCo and PyBullet by 1-2 mrad of overshoot).
+# Now every backend stops at 0.98 x min(pi/2, geometric limit) = 1.5394 rad for both.
+
+@pytest.mark.parametrize("engine", rb.available_backends())
+def test_block_falls_before_lying_flat(engine):
+    """`rockbench run housner-block --engine E --pulse symmetric --amplitude 3 --frequency 1`,
+    default settings: every backend reports the overturn the analytic model finds."""
+    scene = rb.load_scene("housner-block")
+    pulse = rb.RickerPulse.dimensionless(3.0, 1.0, scene.structure, "symmetric", 1)
+    fall = scene.fall_angles[1]
+    assert fall == pytest.approx(0.98 * math.pi / 2, rel=1e-15)
+    ref = rb.run(scene, pulse)
+    r = rb.run(scene, pulse, engine=engine)
+    assert ref.summary.overturned
+    assert r.summary.overturned, (r.summary.status, r.summary.reason, r.summary.max_abs_phi)
+    assert fall * (1 - 1e-9) <= r.summary.max_abs_phi < math.pi / 2   # stopped before lying flat
+    assert r.summary.t_overturn == pytest.approx(ref.summary.t_overturn, abs=0.1)
+
+
+@pytest.mark.parametrize("engine", rb.available_backends())
+def test_symmetric_frame_falls_before_lying_flat(engine):
+    """Free rocking of the symmetric frame released at 0.3 rad (about 2 alpha, beyond its
+    critical angle): a short run that overturns in every backend at the fall angle."""
+    scene = rb.load_scene("paper-symmetric")
+    fall = scene.fall_angles[1]
+    assert fall == pytest.approx(0.98 * math.pi / 2, rel=1e-15)
+    r = rb.run(scene, None, engine=engine, phi0=0.3, duration=4.0)
+    assert r.summary.overturned, (r.summary.status, r.summary.reason, r.summary.max_abs_phi)
+    assert fall * (1 - 1e-9) <= r.summary.max_abs_phi < math.pi / 2

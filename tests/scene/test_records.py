@@ -14,10 +14,14 @@ from hypothesis import strategies as st
 
 from rockbench.constants import G_STANDARD
 from rockbench.errors import ParameterError, RecordError
-from rockbench.scene.records import load_at2, load_columns, load_record
+from rockbench.scene.records import find_records, load_at2, load_columns, load_record
 
 RECORDS = Path(__file__).resolve().parents[2].parent / "shared" / "records"
 SAC_LA = RECORDS / "sac-la-2in50"
+#: Small record fixtures shipped with the tests (tests/data/records/README.md): never skipped.
+FIXTURES = Path(__file__).resolve().parents[1] / "data" / "records"
+FIX_AT2 = FIXTURES / "IV1940_ElCentro_180_5s.AT2"
+FIX_COLUMNS = FIXTURES / "LA21_6s.dat"
 
 #: PROVENANCE.md, section 2: (file, NPTS, DT [s], PGA [g], PGA [cm/s^2], time of PGA [s]).
 AT2_FILES = [
@@ -83,6 +87,54 @@ def test_sac_la_through_load_record_with_scale():
     assert r.peak * 100 == pytest.approx(0.5 * 1258.00, abs=0.005)
     assert r.name == "LA21 x0.5"
     assert r.describe()["scale"] == 0.5
+
+
+# --- the shipped fixtures (tests/data/records): run on a fresh clone, never skipped ------------------
+def test_fixture_at2_loads_with_its_header():
+    r = load_record(FIX_AT2)
+    assert r.npts == 500 and r.dt == 0.01 and r.t_start == 0.0
+    assert r.t_end == pytest.approx(4.99, abs=1e-12)
+    assert r.units_in == "g" and r.name == "IV1940_ElCentro_180_5s"
+    # the first 5 s hold the record's PGA (PROVENANCE.md: 0.31288 g at 2.15 s)
+    assert r.peak / G_STANDARD == pytest.approx(0.31288, abs=5e-6)
+    assert r.time[np.argmax(np.abs(r.samples))] == pytest.approx(2.15, abs=1e-9)
+    assert r.samples[0] / G_STANDARD == pytest.approx(-0.6403182e-02, rel=1e-12)
+    assert load_at2(FIX_AT2).describe() == r.describe()
+
+
+def test_fixture_headerless_takes_dt_and_units_from_records_csv():
+    r = load_record(FIX_COLUMNS)                        # dt and units from records.csv
+    assert r.npts == 300 and r.dt == 0.02 and r.units_in == "cm/s2"
+    assert r.peak * 100 == pytest.approx(74.112, abs=5e-4)
+    assert r.time[np.argmax(np.abs(r.samples))] == pytest.approx(5.44, abs=1e-9)
+    assert r.samples[0] * 100 == pytest.approx(0.45156e-01, rel=1e-12)
+    given = load_record(FIX_COLUMNS, dt=0.02, units="cm/s2")
+    np.testing.assert_array_equal(given.samples, r.samples)
+    # an explicit option wins over the listing
+    assert load_record(FIX_COLUMNS, units="m/s2").peak == pytest.approx(74.112, abs=5e-6)
+
+
+def test_fixture_folder_is_found_whole():
+    records, notes = find_records(FIXTURES)
+    assert notes == []
+    by_name = {r["name"]: r for r in records}
+    assert set(by_name) == {"IV1940_ElCentro_180_5s", "LA21_6s"}
+    assert by_name["IV1940_ElCentro_180_5s"]["dt"] is None          # the header gives it
+    assert (by_name["LA21_6s"]["dt"], by_name["LA21_6s"]["units"]) == (0.02, "cm/s2")
+    with open(FIXTURES / "records.csv", newline="") as fh:
+        row = next(csv.DictReader(fh))
+    r = load_record(by_name["LA21_6s"]["path"], dt=by_name["LA21_6s"]["dt"],
+                    units=by_name["LA21_6s"]["units"])
+    assert r.npts == int(row["npts"]) and r.peak * 100 == pytest.approx(
+        float(row["pga_cm_s2"]), abs=5e-4)
+
+
+def test_fixtures_are_the_first_samples_of_the_shared_records():
+    """Where ../shared/records is present: the fixtures are exact cuts of the records."""
+    full = load_at2(need(RECORDS / "IV1940_ElCentro_180.AT2"))
+    np.testing.assert_array_equal(load_at2(FIX_AT2).samples, full.samples[:500])
+    la21 = load_columns(need(SAC_LA / "LA21.dat"), dt=0.02, units="cm/s2")
+    np.testing.assert_array_equal(load_record(FIX_COLUMNS).samples, la21.samples[:300])
 
 
 # --- synthetic AT2 files --------------------------------------------------------------------------

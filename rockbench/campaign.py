@@ -1,0 +1,415 @@
+"""The default campaign: what ``rockbench report`` (and ``make report``) runs.
+
+Plan -> sweep -> compare tables -> report. :func:`run_campaign` runs every available backend
+against the analytic reference on the paper's frames and writes one self-contained page, the
+tables as CSV and the figures as PNG. Its parts (the plan: :func:`campaign_plan`, from the case
+catalogue ``rockbench/scenarios/cases.toml``; ``docs/report.md`` describes the page and every
+table):
+
+1. **Pulse cases** - the paper's symmetric and asymmetric frames, free-standing and hybrid
+   (scenes :data:`SCENES`), under symmetric and antisymmetric Ricker pulses of both signs at the
+   (A, W) points :data:`PULSE_POINTS`: one :func:`rockbench.compare.compare` per case (rotation
+   histories, nrmse, peak error, eta, verdicts, cost).
+2. **Free rocking** - every scene released from phi0 = :data:`FREE_PHI0_OVER_ALPHA` alpha: the
+   effective eta of each engine per rocking direction against the analytic eta.
+3. **Overturning map** - :data:`MAP_SCENE` under positive symmetric pulses on the coarse grid
+   :data:`MAP_A` x :data:`MAP_W`, every backend (via :func:`rockbench.sweep.run_cases`): where
+   an engine's verdict differs from the analytic one.
+4. **Speed against accuracy** - one pulse case per engine at the time steps :data:`DT_SWEEP`:
+   nrmse and peak error against the real-time factor.
+5. **Records** (only with ``records_dir``) - peak rotation per record for the free-standing and
+   the hybrid (eps_f = 1 %) asymmetric frame, both polarities, as in the paper's Fig. 9 (via
+   :func:`rockbench.sweep.run_cases`).
+
+The comparisons (parts 1, 2, 4) run through the one executor (:mod:`rockbench.sweep.executors`)
+and are kept, as small pickles, in the one store (:mod:`rockbench.sweep.store`), under a
+fingerprint of the physics code (:func:`code_fingerprint`), beside the sweep cases (parts 3, 5).
+A rerun, e.g. after Ctrl-C, reuses what finished; after a change to a backend, the scene model
+or an engine version, everything runs again.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from .report import campaign_page as P
+from .report import tables as T
+from .report.conclusions import campaign_conclusion
+from .report.tables import CAMPAIGN_COLUMNS
+from .result import motion_label
+from .runner import REFERENCE, resolve_engines
+from .scene.records import find_records
+from .sweep import store as S
+from .sweep.cases import campaign_plan
+from .sweep.executors import check_options, cpu_count, execute
+
+__all__ = [
+    "CAMPAIGN_COLUMNS",
+    "DT_CASE",
+    "DT_SWEEP",
+    "FREE_DURATION",
+    "FREE_PHI0_OVER_ALPHA",
+    "MAP_A",
+    "MAP_SCENE",
+    "MAP_W",
+    "PULSE_POINTS",
+    "PULSE_SHAPES",
+    "PULSE_TAIL",
+    "RECORD_FRAMES",
+    "SCENES",
+    "campaign_plan",
+    "code_fingerprint",
+    "find_records",
+    "run_campaign",
+]
+
+code_fingerprint = S.code_fingerprint
+
+_PLAN = campaign_plan()
+#: The paper's frames (built-in scenes).
+SCENES: tuple[str, ...] = _PLAN["scenes"]
+#: (A, W) points of the pulse cases: A = a_g / (g tan alpha), W = omega_g / p.
+PULSE_POINTS: tuple[tuple[float, float], ...] = _PLAN["pulse_points"]
+#: (shape, sign) of the pulse cases.
+PULSE_SHAPES: tuple[tuple[str, int], ...] = _PLAN["pulse_shapes"]
+#: Free rocking after each pulse [s] (the pulse itself lasts 6 T_g).
+PULSE_TAIL: float = _PLAN["pulse_tail"]
+#: Overturning map grid (positive symmetric pulse).
+MAP_SCENE: str = _PLAN["map_scene"]
+MAP_A: tuple[float, ...] = _PLAN["map_A"]
+MAP_W: tuple[float, ...] = _PLAN["map_W"]
+#: Time steps [s] of the speed-against-accuracy sweep, and its case.
+DT_SWEEP: tuple[float, ...] = _PLAN["dt_sweep"]
+DT_CASE: dict[str, Any] = _PLAN["dt_case"]
+#: Free rocking: initial rotation phi0 / alpha [-] and duration [s].
+FREE_PHI0_OVER_ALPHA: float = _PLAN["free_phi0"]
+FREE_DURATION: float = _PLAN["free_duration"]
+#: Frames of the record part (label -> scene), as in the paper's Fig. 9.
+RECORD_FRAMES: dict[str, str] = _PLAN["record_frames"]
+
+
+def _pulse_duration(scene_name: str, A: float, W: float, shape: str, tail: float | None):
+    """Duration [s] of a pulse run: the pulse window (6 T_g) plus ``tail`` s (None: the
+    package default, pulse + 10 s)."""
+    if tail is None:
+        return None
+    from .scene import load_scene
+    from .scene.motion import RickerPulse
+
+    sc = load_scene(scene_name)
+    p = RickerPulse.dimensionless(A, W, sc.structure, shape, 1)
+    return float(p.t_end - p.t_start + tail)
+
+
+# ==========================================================================================
+# Comparison jobs (histories needed): run through the executor, kept as payloads in the store
+# ==========================================================================================
+def _job_label(job: Mapping[str, Any]) -> str:
+    """``"<scene> symm+ A=3 W=4"``, ``"<scene> free rocking"``, ``"<engine> dt=0.001 s"``."""
+    if job["kind"] == "dt":
+        return f"{job['engine']} dt={job['dt']:g} s"
+    return f"{job['scene']} {motion_label(job.get('motion'))}"
+
+
+def _run_job(job: dict[str, Any]) -> dict[str, Any]:
+    """One comparison job (in a worker): returns a small, picklable payload."""
+    from .compare import compare, eta_rows, metrics
+    from .report.figures import Trace
+    from .runner import run
+    from .scene import load_scene
+    from .scene.motion import motion_from_spec
+
+    scene = load_scene(job["scene"])
+    motion = motion_from_spec(job.get("motion"), scene.structure)
+    phi0 = float(job.get("phi0_over_alpha", 0.0)) * scene.alpha
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    if job["kind"] == "dt":
+        tr = time.perf_counter()
+        ref = run(scene, motion, engine=REFERENCE, duration=job["duration"], phi0=phi0)
+        ref_run_s = time.perf_counter() - tr
+        output_dt = max(job["dt"], 1e-3)
+        ts = time.perf_counter()
+        try:
+            res = run(scene, motion, engine=job["engine"], duration=job["duration"], phi0=phi0,
+                      dt=job["dt"], output_dt=output_dt)
+        except Exception as e:  # bad settings for this engine: a row, not a crash
+            return {"job": job, "error": f"{type(e).__name__}: {e}"}
+        run_s = time.perf_counter() - ts
+        row = metrics(res, ref)
+        row.update(dt=job["dt"], output_dt=output_dt, run_s=run_s,
+                   sim_time=float(res.cost.sim_time),
+                   run_real_time_factor=float(res.cost.sim_time) / run_s if run_s > 0
+                   else math.inf,
+                   ref_real_time_factor=float(ref.cost.real_time_factor),
+                   ref_run_real_time_factor=float(ref.cost.sim_time) / ref_run_s
+                   if ref_run_s > 0 else math.inf)
+        return {"job": job, "row": row, "n_eta": len(eta_rows(res, ref)),
+                "elapsed_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
+    c = compare(scene, motion, engines=job["engines"], phi0=phi0, duration=job["duration"])
+    traces = {k: Trace.from_result(r, max_points=job.get("max_points", 2500)).to_dict()
+              for k, r in c.results.items()}
+    return {"job": job, "table": c.table, "eta": c.eta, "traces": traces,
+            "alpha": float(scene.alpha), "motion": c.motion, "phi0": phi0,
+            "settings": {k: dict(v) for k, v in c.settings.items()},
+            "elapsed_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
+
+
+def _run_job_safe(job: dict[str, Any]) -> dict[str, Any]:
+    """:func:`_run_job`, a failure becoming an error payload (what the executor runs)."""
+    try:
+        return _run_job(job)
+    except Exception as e:  # a failing job is data, not a crash of the campaign
+        return {"job": job, "error": f"{type(e).__name__}: {e}"}
+
+
+def _job_weight(job: Mapping[str, Any]) -> float:
+    """Relative cost of a job: the longest run first keeps the pool balanced."""
+    w = 1.0
+    if "hybrid" in job["scene"]:
+        w *= 2.5
+    if job["kind"] == "dt":
+        w *= 1e-3 / job["dt"]
+        w *= {"pybullet": 2.5}.get(job["engine"], 1.0)
+    return w
+
+
+def _comparisons(jobs: Sequence[dict[str, Any]], *, cache: Path, desc: str,
+                 **run: Any) -> list[dict[str, Any]]:
+    """The payloads of ``jobs`` in input order, each with its ``label``: stored ones loaded,
+    the others run (longest first) and stored as each finishes (error payloads are not kept)."""
+    out: dict[str, dict[str, Any]] = {}
+    todo: dict[str, dict[str, Any]] = {}
+    for job in jobs:
+        k = S.key(job)
+        hit = S.load_payload(cache, k)
+        if hit is not None and "error" not in hit:
+            out[k] = hit
+        else:
+            todo[k] = job
+
+    def on_result(k: str, payload: dict[str, Any]) -> None:
+        out[k] = payload
+        if "error" not in payload:
+            S.write_payload(cache, k, payload)
+
+    items = sorted(todo.items(), key=lambda kj: -_job_weight(kj[1]))
+    execute(_run_job_safe, items, on_result=on_result,
+            crashed=lambda job, reason: {"job": job, "error": reason}, label=_job_label,
+            is_error=lambda p: "error" in p, desc=desc, **run)
+    return [dict(out[k], label=_job_label(job)) for job in jobs if (k := S.key(job)) in out]
+
+
+def _sweep(cases: list[dict[str, Any]], *, store: Path | None, **run: Any) -> pd.DataFrame:
+    from .sweep import run_cases
+
+    if not cases:
+        return pd.DataFrame()
+    return run_cases(cases, store=store, **run)
+
+
+# ==========================================================================================
+# run_campaign
+# ==========================================================================================
+def _engine_versions() -> dict[str, str]:
+    """Backend name -> engine version, or why it is unavailable (the page's versions)."""
+    from .engines import engine_info
+
+    return {r["name"]: (r.get("version") if r["available"]
+                        else f"unavailable: {r.get('reason', '')}") for r in engine_info()}
+
+
+def _hybrid(scenes) -> dict[str, bool]:
+    """Scene name -> whether it has devices (tendons, dampers)."""
+    from .scene import load_scene
+
+    out = {}
+    for s in scenes:
+        try:
+            out[s] = load_scene(s).devices is not None
+        except Exception:  # not loadable here: judged by its name in the conclusion
+            pass
+    return out
+
+
+def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[str] | None = None,
+                 records_dir: str | os.PathLike | None = None, quick: bool = False,
+                 progress: bool = True, store: str | os.PathLike | None = None,
+                 executor: str = "process", dask_address: str | None = None,
+                 workers: int | None = None) -> Path:
+    """Run the default campaign (module docstring) and write its report; return the path of
+    ``out_dir/index.html``.
+
+    Parameters
+    ----------
+    out_dir : folder written: ``index.html``, the CSV tables (``docs/report.md``), the figures
+        as PNG under ``figures/``.
+    engines : backend names (default: every available backend; the analytic reference always
+        runs). Unavailable ones are listed on the page and skipped.
+    records_dir : a folder of records (``.AT2`` files, or headerless files listed in a
+        ``records.csv`` with their dt): adds the peak rotation per record (paper Fig. 9).
+    quick : a few cases only (tests, a first look; well under a minute).
+    progress : tqdm progress bars naming what runs.
+    store : folder of the resumable store (default ``out_dir/store``); finished cases are
+        reused on a rerun.
+    executor : "process" (local process pool, one worker per core), "serial", or "dask"
+        (``dask_address``: a running scheduler; none: a local cluster).
+    workers : worker processes (default: one per available core).
+    """
+    from .engines import available_backends
+
+    t_start = time.perf_counter()
+    check_options(executor, workers, dask_address)
+    names = resolve_engines(engines) if engines is not None else available_backends()
+    names = [REFERENCE] + [n for n in names if n != REFERENCE]
+    if records_dir is not None:
+        find_records(records_dir)          # a bad folder fails now, not after the pulses
+    avail = set(available_backends())
+    missing = [n for n in names if n not in avail]
+    names = [n for n in names if n in avail]
+    plan = campaign_plan(quick)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    store_dir = Path(store) if store is not None else out / "store"
+    fingerprint = code_fingerprint()
+    cache = store_dir / fingerprint / "comparisons"
+    notes: list[str] = []
+    sweep_store = store_dir / fingerprint / "cases" if S.have_pyarrow() else None
+    if sweep_store is None:
+        notes.append("pyarrow is not installed: the sweep cases (map, records) are not kept "
+                     "between runs (pip install 'rockbench[parquet]').")
+    run = dict(executor=executor, dask_address=dask_address, progress=progress,
+               workers=workers)
+    timings: dict[str, float] = {}
+
+    # 1 + 2: comparisons (pulse cases, free rocking) ------------------------------------
+    t = time.perf_counter()
+    jobs = []
+    for scene in plan["scenes"]:
+        for (A, W) in plan["pulse_points"]:
+            for shape, sign in plan["pulse_shapes"]:
+                jobs.append({"kind": "pulse", "scene": scene, "engines": names,
+                             "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
+                                        "A": float(A), "W": float(W)},
+                             "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
+    for scene in plan["scenes"]:
+        jobs.append({"kind": "free", "scene": scene, "engines": names, "motion": None,
+                     "phi0_over_alpha": plan["free_phi0"], "duration": plan["free_duration"]})
+    payloads = _comparisons(jobs, cache=cache, desc="comparisons", **run)
+    timings["comparisons"] = time.perf_counter() - t
+    for p in payloads:
+        if "error" in p:
+            notes.append(f"{p['label']} failed: {p['error']}")
+    payloads = [p for p in payloads if "error" not in p]
+
+    # 4: speed against accuracy ------------------------------------------------------------
+    t = time.perf_counter()
+    dc = plan["dt_case"]
+    dur = _pulse_duration(dc["scene"], dc["A"], dc["W"], dc["shape"], plan["dt_tail"])
+    dt_jobs = [{"kind": "dt", "scene": dc["scene"], "engine": e, "dt": float(dt),
+                "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")}},
+                "duration": dur}
+               for e in names if e != REFERENCE for dt in plan["dt_sweep"]]
+    dt_payloads = _comparisons(dt_jobs, cache=cache, desc="time steps", **run)
+    speed = T.speed_table(
+        {"backend": p["job"]["engine"], "dt": p["job"]["dt"], "status": "error",
+         "reason": p["error"]} if "error" in p else p["row"] for p in dt_payloads)
+    timings["speed"] = time.perf_counter() - t
+
+    # 3: overturning map -----------------------------------------------------------------
+    t = time.perf_counter()
+    from .sweep import pulse_grid
+
+    map_cases = []
+    for A in plan["map_A"]:
+        for W in plan["map_W"]:
+            d = _pulse_duration(plan["map_scene"], A, W, "symmetric", plan["map_duration_tail"])
+            map_cases += pulse_grid(plan["map_scene"], "symmetric", 1, [A], [W], names,
+                                    duration=d)
+    omap = T.sweep_rows(_sweep(map_cases, store=sweep_store, **run))
+    if len(omap):
+        omap = T.with_verdicts(omap, ("A", "W"))
+    timings["map"] = time.perf_counter() - t
+
+    # 5: records ----------------------------------------------------------------------------
+    t = time.perf_counter()
+    records = pd.DataFrame()
+    if records_dir is not None:
+        records = _records(records_dir, plan, names, notes, store=sweep_store, **run)
+    timings["records"] = time.perf_counter() - t
+
+    # tables -----------------------------------------------------------------------------
+    t = time.perf_counter()
+    metrics = T.metrics_table(payloads)
+    eta, eta_summary = T.eta_tables(payloads)
+    engines_tab = T.engine_summary(metrics, eta_summary, speed, omap)
+    files = {"metrics.csv": metrics, "eta.csv": eta, "eta_summary.csv": eta_summary,
+             "engines.csv": engines_tab, "speed_accuracy.csv": speed,
+             "overturning_map.csv": omap}
+    if len(records):
+        files["record_peaks.csv"] = records
+    for name, df in files.items():
+        df.to_csv(out / name, index=False)
+    lines = campaign_conclusion(engines_tab, metrics, eta_summary, speed, omap, records,
+                                hybrid=_hybrid(plan["scenes"]), map_scene=plan["map_scene"])
+
+    # page -------------------------------------------------------------------------------
+    sections = P.page_sections(plan, names, missing, payloads, metrics, eta, eta_summary,
+                               engines_tab, speed, omap, records, lines, notes, out / "figures",
+                               quick=quick, records_dir=records_dir, store_dir=store_dir,
+                               fingerprint=fingerprint, engine_versions=_engine_versions(),
+                               files=list(files))
+    timings["report"] = time.perf_counter() - t
+    total = time.perf_counter() - t_start
+    cpu = sum(float(p.get("cpu_s", 0.0)) for p in payloads + dt_payloads)
+    sections.append(("runtime-section", "Run time",
+                     P.runtime_html(timings, total, workers or cpu_count(), cpu)))
+    path = out / "index.html"
+    path.write_text(P.render(sections, quick=quick, with_records=bool(len(records))),
+                    encoding="utf-8")
+    return path
+
+
+def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list[str], *,
+             store: Path | None, **run: Any) -> pd.DataFrame:
+    """Part 5: every record on every frame of ``plan["record_frames"]``, both polarities."""
+    recs, rnotes = find_records(records_dir)
+    notes.extend(rnotes)
+    if plan["max_records"]:
+        recs = recs[: plan["max_records"]]
+    frames = plan["record_frames"]
+    rec_cases = []
+    for rec in recs:
+        rec_duration = None
+        if plan["record_tail"] is not None:
+            from .scene.records import load_record
+            r = load_record(rec["path"], dt=rec["dt"], units=rec["units"])
+            rec_duration = float(r.t_end - r.t_start + plan["record_tail"])
+        for frame, scene in frames.items():
+            for pol in (1.0, -1.0):
+                m = {"kind": "record", "path": rec["path"], "scale": pol}
+                if rec["dt"] is not None:
+                    m.update(dt=rec["dt"], units=rec["units"])
+                for e in names:
+                    rec_cases.append({"scene": scene, "engine": e, "motion": m,
+                                      "duration": rec_duration})
+    records = pd.DataFrame()
+    rows = T.sweep_rows(_sweep(rec_cases, store=store, **run))
+    if len(rows):
+        byscene = {v: k for k, v in frames.items()}
+        rows["record"] = [Path(p).stem for p in rows["path"]]
+        rows["frame"] = [byscene.get(s, s) for s in rows["scene"]]
+        rows["polarity"] = [int(round(float(v))) for v in rows["polarity"]]
+        rows = T.with_verdicts(rows, ("record", "frame", "polarity"))
+        first = ["record", "frame", "scene", "polarity", "backend"]
+        records = rows[first + [c for c in rows.columns if c not in first + ["path"]]]
+    if not recs:
+        notes.append(f"no record files found under {records_dir}")
+    return records

@@ -1,0 +1,224 @@
+"""The campaign page: its sections, assembled from the campaign's tables, conclusion and
+comparison payloads (``docs/report.md``, "The campaign page"). Reads tables and payloads only;
+the campaign passes the plan, labels, versions and fingerprint it needs."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import pandas as pd
+
+from ..compare import DERIVED_COLUMNS, METRIC_COLUMNS
+from . import figures as F
+from . import html as H
+from .tables import CAMPAIGN_COLUMNS
+
+__all__ = ["page_sections", "runtime_html", "render"]
+
+
+def render(sections, *, quick: bool, with_records: bool) -> str:
+    """The whole page (title, subtitle, sections)."""
+    return H.render_page("rockbench: physics engines against the analytic rocking model",
+                         sections, subtitle="The paper's rocking frames, free-standing and "
+                         "hybrid, under Ricker pulses" + (" and records" if with_records else "")
+                         + ": how far each engine stands from the analytic model, and at what "
+                         "cost." + (" (quick campaign)" if quick else ""))
+
+
+def runtime_html(timings: Mapping[str, float], total: float, workers: int,
+                 cpu_s: float) -> str:
+    """The Run time section: wall seconds per part and in total, workers, CPU seconds."""
+    items = [(f"{k} [s]", f"{v:.1f}") for k, v in timings.items()]
+    items.append(("total [s]", f"{total:.1f}"))
+    items.append(("workers", str(workers)))
+    items.append(("CPU time of the comparisons [s]", f"{cpu_s:.1f}"))
+    return (H._dl(items) + "<p>Wall-clock seconds of this run of the campaign (cases reused "
+            "from the store cost nothing here); CPU time summed over the comparison and "
+            "time-step cases, reused ones included.</p>")
+
+
+def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, engines_tab,
+                  speed, omap, records, lines, notes, figdir, *, quick, records_dir, store_dir,
+                  fingerprint, engine_versions, files) -> list[tuple[str, str, str]]:
+    """The sections (id, title, html) of the campaign page, from its tables and comparison
+    payloads (each with a ``label``); figures are written under ``figdir``.
+
+    ``plan``: the campaign plan (:func:`rockbench.sweep.cases.campaign_plan`); ``names``: the
+    backends that ran, ``missing``: those not available; ``lines``: the conclusion; ``notes``:
+    skipped records and failed cases; ``fingerprint``: the store's code fingerprint;
+    ``engine_versions``: backend name -> version (or why it is unavailable); ``files``: the
+    CSV files written."""
+    units = {**METRIC_COLUMNS, **DERIVED_COLUMNS}
+    for tab in CAMPAIGN_COLUMNS.values():
+        for k, v in tab.items():
+            units.setdefault(k, v)
+    sections: list[tuple[str, str, str]] = []
+
+    # conclusion
+    conc = H.conclusion_html(lines)
+    if notes:
+        conc += "<h3>Notes</h3><ul>" + "".join(f"<li>{H.escape(n)}</li>" for n in notes) + \
+            "</ul>"
+    sections.append(("conclusion-section", "Conclusion", conc))
+
+    # engine summary
+    eng_cols = list(CAMPAIGN_COLUMNS["engines.csv"])
+    grade_as = {"nrmse_median": "nrmse", "nrmse_max": "nrmse",
+                "peak_rel_error_median": "peak_rel_error", "peak_rel_error_max": "peak_rel_error",
+                "eta_mean_rel_error": "eta_mean_rel_error"}
+    summ = H.grade_legend() + H.html_table(engines_tab, eng_cols, units=units, grade_as=grade_as,
+                                           table_id="engines")
+    if len(engines_tab):
+        summ += H.figure_html(
+            F.plot_summary_table(engines_tab, [c for c in eng_cols if c != "engine_version"],
+                                 grade_as=grade_as,
+                                 title="Every engine against the analytic model"),
+            "The summary table as a figure (same colours): medians and extremes over the "
+            "pulse cases, free-rocking eta error, verdict agreement (pulse cases + overturning "
+            "map), real-time factors.", name="summary_table", png_dir=figdir)
+    sections.append(("summary-section", "Summary per engine", summ))
+
+    # histories
+    hist = []
+    pulses = [p for p in payloads if p["job"]["kind"] == "pulse"]
+    for scene in plan["scenes"]:
+        ps = [p for p in pulses if p["job"]["scene"] == scene]
+        if not ps:
+            continue
+        panels = [(p["label"].replace(scene + " ", ""),
+                   {k: F.as_trace(v) for k, v in p["traces"].items()}) for p in ps]
+        fig = F.plot_history_grid(panels, alpha=ps[0]["alpha"], ncols=min(4, len(panels)),
+                                  title=f"{scene}: rotation histories under Ricker pulses")
+        hist.append(H.figure_html(
+            fig, f"{scene}: phi / alpha [-] against t [s] for every pulse case (analytic "
+                 f"reference bold black; impacts marked), alpha = {ps[0]['alpha']:.4f} rad. "
+                 f"Panel titles: pulse shape and sign, A = a_g / (g tan alpha), W = omega_g / p.",
+            name=f"histories_{scene}", png_dir=figdir))
+    sections.append(("histories-section", "Rotation histories", "\n".join(hist) or
+                     "<p>No pulse case finished.</p>"))
+
+    # pulse table
+    shown = H.with_derived(metrics) if len(metrics) else metrics
+    cols = ["case", "backend", "status", "max_abs_phi_over_alpha", "peak_rel_error", "nrmse",
+            "max_abs_error_over_alpha", "t_first_impact_error", "n_impacts", "n_impacts_ref",
+            "eta_mean_rel_error", "overturned", "overturned_ref", "verdict_agrees",
+            "energy_gained_at_impact", "max_penetration", "max_sliding", "real_time_factor"]
+    tab = H.html_table(shown[shown["part"] == "pulse"] if len(shown) else shown, cols,
+                       units=units, table_id="cases", scroll=True)
+    sections.append(("cases-section", "Every pulse case", H.grade_legend() + tab +
+                     '<p>All columns: <a href="metrics.csv">metrics.csv</a>.</p>'))
+
+    # eta
+    etah = []
+    if len(eta_summary):
+        etah.append(H.figure_html(
+            F.plot_eta_summary(eta_summary, title="Free rocking: effective eta against the "
+                                                  "analytic eta"),
+            f"Free rocking from phi0 = {plan['free_phi0']:g} alpha for "
+            f"{plan['free_duration']:g} s: each engine's mean effective coefficient of "
+            f"restitution relative to the analytic eta, 100 (eta_mean / eta_ref - 1) [%], "
+            f"error bars one standard deviation over the impacts, per rocking direction after "
+            f"the impact. Free-standing frames: the engines measure eta from the energy of "
+            f"successive rocking peaks. Hybrid frames: from the angular velocities fitted just "
+            f"before and after each impact (docs/metrics.md), which the tendon and damper "
+            f"forces bend, so part of a hybrid frame's deviation may be the measurement's.",
+            name="eta_free_rocking", png_dir=figdir))
+        etah.append(H.html_table(eta_summary, list(CAMPAIGN_COLUMNS["eta_summary.csv"]),
+                                 units=units, grade_as={"rel_error": "eta_mean_rel_error"},
+                                 scroll=True))
+    first = next((p for p in payloads if p["job"]["kind"] == "free"), None)
+    if first is not None and len(first["eta"]):
+        etah.append(H.figure_html(
+            F.plot_eta(first["eta"], title=f"{first['job']['scene']}, free rocking: eta per "
+                                           f"impact"),
+            "eta [-] of every impact of one free-rocking run (engines: measured from their "
+            "motion; analytic dashed), per direction; right: mean +- standard deviation.",
+            name="eta_per_impact", png_dir=figdir))
+    sections.append(("eta-section", "Coefficient of restitution", "\n".join(etah) or
+                     "<p>No free-rocking run finished.</p>"))
+
+    # speed
+    sp = []
+    if len(speed):
+        okk = speed[speed["status"] == "ok"]
+        rows = okk
+        ref = okk[["ref_real_time_factor", "ref_run_real_time_factor"]].astype(float).median()
+        if len(okk) and ref.notna().all():
+            rows = pd.concat([okk, pd.DataFrame([{
+                "backend": "analytic", "dt": math.nan,
+                "real_time_factor": float(ref["ref_real_time_factor"]),
+                "run_real_time_factor": float(ref["ref_run_real_time_factor"])}])],
+                ignore_index=True)
+        dc = plan["dt_case"]
+        sp.append(H.figure_html(
+            F.plot_speed_accuracy(rows, error="nrmse",
+                                  speeds=("real_time_factor", "run_real_time_factor"),
+                                  title=f"Speed against accuracy: {dc['scene']}, {dc['shape']} "
+                                        f"pulse {dc['sign']:+d}, A = {dc['A']:g}, "
+                                        f"W = {dc['W']:g}"),
+            "nrmse [-] against the real-time factor [-] for each engine at the time steps "
+            f"{', '.join(f'{d:g}' for d in plan['dt_sweep'])} s. Left: engine stepping only "
+            "(the Cost of the Result); right: the whole run, including model building and "
+            "rockbench's per-step work (ground motion, device forces, sampling, contact "
+            "diagnostics). Dotted line: the analytic reference on the same case (median "
+            "over its runs in the sweep).", name="speed_accuracy", png_dir=figdir))
+        sp.append(H.html_table(speed, list(CAMPAIGN_COLUMNS["speed_accuracy.csv"]),
+                               units=units, scroll=True))
+    sections.append(("speed-section", "Speed against accuracy", "\n".join(sp) or
+                     "<p>No engine besides the analytic reference.</p>"))
+
+    # map
+    mp = []
+    if len(omap):
+        mp.append(H.figure_html(
+            F.plot_overturn_maps(omap, title=f"Overturning map: {plan['map_scene']}, positive "
+                                             f"symmetric Ricker pulses"),
+            "Overturning verdicts on the (W, A) plane, W = omega_g / p [-], "
+            "A = a_g / (g tan alpha) [-]: filled squares overturn, open circles survive; a "
+            "black ring marks an engine verdict that differs from the analytic one.",
+            name="overturning_map", png_dir=figdir))
+        mp.append("<details><summary>map points (table)</summary>" + H.html_table(
+            omap, list(CAMPAIGN_COLUMNS["overturning_map.csv"]), units=units, scroll=True)
+            + "</details>")
+    sections.append(("map-section", "Overturning map", "\n".join(mp) or "<p>No map.</p>"))
+
+    # records
+    if len(records):
+        sections.append(("records-section", "Records (paper Fig. 9)", H.figure_html(
+            F.plot_record_peaks(records, title="Peak rotation per record"),
+            "Peak rotation max |phi| / alpha [-] of the free-standing and the hybrid "
+            "(eps_f = 1 %) asymmetric frame under each record, as recorded (filled) and "
+            "reversed (open); triangles at the top: overturned.", name="record_peaks",
+            png_dir=figdir) + "<details><summary>record runs (table)</summary>" + H.html_table(
+                records, list(CAMPAIGN_COLUMNS["record_peaks.csv"]), units=units,
+                scroll=True) + "</details>"))
+
+    # settings
+    items = [("engines", ", ".join(names)),
+             ("engines not available", ", ".join(missing) or "none"),
+             ("scenes", ", ".join(plan["scenes"])),
+             ("pulse (A, W) points", ", ".join(f"({a:g}, {w:g})"
+                                               for a, w in plan["pulse_points"])),
+             ("pulse shapes", ", ".join(f"{s} {g:+d}" for s, g in plan["pulse_shapes"])),
+             ("pulse run length", f"pulse window (6 T_g) + {plan['pulse_tail']:g} s"),
+             ("free rocking", f"phi0 = {plan['free_phi0']:g} alpha, "
+                              f"{plan['free_duration']:g} s"),
+             ("overturning map", f"{plan['map_scene']}, symmetric +1, A in "
+                                 f"{list(plan['map_A'])}, W in {list(plan['map_W'])}"),
+             ("time steps [s]", ", ".join(f"{d:g}" for d in plan["dt_sweep"])),
+             ("records folder", str(records_dir) if records_dir else "none"),
+             ("quick", str(bool(quick))), ("store", str(store_dir)),
+             ("code fingerprint", fingerprint)]
+    default_settings = {}
+    for p in payloads:
+        for k, v in p.get("settings", {}).items():
+            default_settings.setdefault(k, v)
+    sett = (H._dl(items) + "<h3>Backend settings (defaults, all cases but the time-step sweep)"
+            "</h3>" + H._dl((f"settings {k}", v) for k, v in default_settings.items())
+            + "<h3>Versions</h3>" + H.versions_html(engine_versions))
+    sections.append(("settings-section", "Settings and versions", sett))
+    links = ", ".join(f'<a href="{f}">{f}</a>' for f in files)
+    sections.append(("files-section", "Tables", f"<p>{links}. Columns and units: "
+                     f"docs/report.md.</p>"))
+    return sections

@@ -1,0 +1,239 @@
+"""The campaign's tables, built from what the campaign hands over: comparison payloads (the
+tables of :func:`rockbench.compare.compare`), time-step rows and sweep frames
+(:func:`rockbench.sweep.run_cases`). Columns and units: :data:`CAMPAIGN_COLUMNS` and
+``docs/report.md``. Pure functions of data frames: nothing here runs anything."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+import pandas as pd
+
+from . import figures as F
+
+__all__ = ["CAMPAIGN_COLUMNS", "SPEED_COLUMNS", "metrics_table", "eta_tables",
+           "engine_summary", "speed_table", "sweep_rows", "with_verdicts"]
+
+#: Columns of the campaign's CSV files (beyond the METRIC_COLUMNS / ETA_COLUMNS they repeat).
+CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
+    "metrics.csv": {
+        "part": "-, pulse | free (free rocking)",
+        "case": "-, short label of the case",
+        "scene": "-, built-in scene name",
+        "shape": "-, symmetric | antisymmetric Ricker pulse (empty: free rocking)",
+        "sign": "-, +1 | -1 sign of the pulse",
+        "A": "-, a_g / (g tan alpha)",
+        "W": "-, omega_g / p",
+        "phi0": "rad, initial rotation",
+        "(then)": "every column of rockbench.compare.METRIC_COLUMNS",
+    },
+    "eta.csv": {"scene": "-, scene (free rocking)", "phi0": "rad, initial rotation",
+                "(then)": "every column of rockbench.compare.ETA_COLUMNS"},
+    "eta_summary.csv": {
+        "scene": "-", "backend": "-", "direction": "-, +1 counterclockwise, -1 clockwise",
+        "eta_ref": "-, analytic eta", "eta_mean": "-, mean effective eta",
+        "eta_std": "-, standard deviation (ddof 0)", "n_impacts": "-, impacts measured",
+        "rel_error": "-, eta_mean / eta_ref - 1"},
+    "engines.csv": {
+        "backend": "-", "engine_version": "-",
+        "n_cases": "-, pulse cases run", "n_ok": "-, of them with status ok",
+        "nrmse_median": "-, median nrmse over the ok pulse cases",
+        "nrmse_max": "-, largest nrmse over the ok pulse cases",
+        "peak_rel_error_median": "-, median |peak_rel_error|",
+        "peak_rel_error_max": "-, largest |peak_rel_error|",
+        "eta_mean_rel_error": "-, free rocking: mean over scenes and directions of "
+                              "|eta_mean / eta_ref - 1|",
+        "verdicts_agree": "-, pulse cases and map points whose overturning verdict agrees",
+        "verdicts_total": "-, pulse cases and map points compared",
+        "energy_gained": "-, pulse cases with energy gained at an impact",
+        "real_time_factor_median": "-, median real-time factor (stepping only)",
+        "run_real_time_factor_median": "-, median real-time factor of the whole run (speed "
+                                       "sweep)"},
+    "speed_accuracy.csv": {
+        "backend": "-", "dt": "s, time step", "output_dt": "s, output interval",
+        "status": "-", "nrmse": "-", "peak_rel_error": "-", "max_abs_error_over_alpha": "-",
+        "real_time_factor": "-, simulated s per wall s of stepping",
+        "run_s": "s, whole run (model building and per-step work included)",
+        "run_real_time_factor": "-, simulated s per wall s of the whole run",
+        "sim_time": "s, simulated time",
+        "ref_real_time_factor": "-, the analytic reference on the same case (integration only)",
+        "ref_run_real_time_factor": "-, the analytic reference, whole run"},
+    "overturning_map.csv": {
+        "backend": "-", "scene": "-", "shape": "-", "sign": "-", "A": "-", "W": "-",
+        "status": "-", "overturned": "-, bool", "overturned_ref": "-, analytic verdict",
+        "verdict_agrees": "-, bool", "max_abs_phi_over_alpha": "-",
+        "real_time_factor": "-"},
+    "record_peaks.csv": {
+        "record": "-, file stem", "frame": "-, free-standing | hybrid", "scene": "-",
+        "polarity": "-, +1 as recorded, -1 reversed", "backend": "-", "status": "-",
+        "max_abs_phi_over_alpha": "-", "overturned": "-, bool",
+        "overturned_ref": "-, analytic verdict", "verdict_agrees": "-, bool",
+        "peak_rel_error": "-, max|phi| / max|phi_ref| - 1 (both ok and not overturned)",
+        "real_time_factor": "-"},
+}
+
+#: Columns of ``speed_accuracy.csv``, in order.
+SPEED_COLUMNS = ["backend", "dt", "output_dt", "status", "reason", "nrmse", "peak_rel_error",
+                 "max_abs_error_over_alpha", "n_impacts", "n_impacts_ref", "eta_max_rel_error",
+                 "verdict_agrees", "real_time_factor", "wall_s", "steps", "run_s",
+                 "run_real_time_factor", "sim_time", "engine_version",
+                 "ref_real_time_factor", "ref_run_real_time_factor"]
+
+
+def _bool(v: Any) -> bool | None:
+    if v is None or v is pd.NA:
+        return None
+    if isinstance(v, float) and math.isnan(v):
+        return None
+    return bool(v)
+
+
+# ==========================================================================================
+# Sweep frames: the overturning map and the records
+# ==========================================================================================
+def with_verdicts(df: pd.DataFrame, keys: Sequence[str]) -> pd.DataFrame:
+    """Add overturned_ref (the analytic verdict of the same keys) and verdict_agrees."""
+    df = df.copy()
+    ref = df[(df["backend"] == "analytic") & (df["status"] == "ok")]
+    verdict = {tuple(r[k] for k in keys): _bool(r["overturned"]) for _, r in ref.iterrows()}
+    peak = {tuple(r[k] for k in keys): r["max_abs_phi_over_alpha"] for _, r in ref.iterrows()}
+    refs, agree, rel = [], [], []
+    for _, r in df.iterrows():
+        k = tuple(r[c] for c in keys)
+        v = verdict.get(k)
+        mine = _bool(r["overturned"]) if r["status"] == "ok" else None
+        refs.append(v)
+        agree.append(None if v is None or mine is None else v == mine)
+        p = peak.get(k)
+        rel.append(r["max_abs_phi_over_alpha"] / p - 1.0
+                   if mine is False and v is False and p and p > 0 else math.nan)
+    df["overturned_ref"] = pd.array(refs, dtype="boolean")
+    df["verdict_agrees"] = pd.array(agree, dtype="boolean")
+    df["peak_rel_error"] = rel
+    return df
+
+
+def sweep_rows(df: pd.DataFrame) -> pd.DataFrame:
+    """run_cases rows -> campaign columns (backend, shape, sign, A, W, record, polarity)."""
+    if df.empty:
+        return df
+    out = pd.DataFrame({"backend": df["engine"].astype(str), "scene": df["scene"].astype(str)})
+    for src, dst in (("motion.shape", "shape"), ("motion.sign", "sign"), ("motion.A", "A"),
+                     ("motion.W", "W"), ("motion.scale", "polarity"), ("motion.path", "path")):
+        if src in df:
+            out[dst] = df[src].to_numpy()
+    for c in ("status", "reason", "max_abs_phi_over_alpha", "overturned", "t_overturn",
+              "n_impacts", "fractured", "max_penetration", "max_sliding", "wall_s",
+              "real_time_factor", "run_s", "engine_version"):
+        if c in df:
+            out[c] = df[c].to_numpy()
+    out["overturned"] = pd.array([_bool(v) for v in out["overturned"]], dtype="boolean") \
+        if "overturned" in out else pd.array([None] * len(out), dtype="boolean")
+    return out
+
+
+# ==========================================================================================
+# Comparison payloads: {"job", "label", "table", "eta", "phi0", ...}
+# ==========================================================================================
+def _case_columns(job: Mapping[str, Any], label: str, phi0: float) -> dict[str, Any]:
+    m = job.get("motion")
+    if job["kind"] == "free":
+        return {"part": "free", "case": label, "scene": job["scene"], "shape": "",
+                "sign": pd.NA, "A": math.nan, "W": math.nan, "phi0": phi0}
+    return {"part": "pulse", "case": label, "scene": job["scene"], "shape": m["shape"],
+            "sign": int(m["sign"]), "A": float(m["A"]), "W": float(m["W"]), "phi0": phi0}
+
+
+def metrics_table(payloads: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
+    """``metrics.csv``: one row per (case, backend), the case's columns then the metrics."""
+    frames = []
+    for p in payloads:
+        if "table" not in p:
+            continue
+        cols = _case_columns(p["job"], p["label"], p["phi0"])
+        t = p["table"].copy()
+        for k, v in reversed(list(cols.items())):
+            t.insert(0, k, v)
+        frames.append(t)
+    if not frames:
+        return pd.DataFrame()
+    df = pd.concat(frames, ignore_index=True)
+    df["sign"] = pd.array([None if pd.isna(v) else int(v) for v in df["sign"]], dtype="Int64")
+    return df
+
+
+def eta_tables(payloads: Iterable[Mapping[str, Any]]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """``eta.csv`` (every impact of the free-rocking runs) and ``eta_summary.csv``."""
+    per_impact, summary = [], []
+    for p in payloads:
+        if "eta" not in p or p["job"]["kind"] != "free":
+            continue
+        scene = p["job"]["scene"]
+        e = p["eta"].copy()
+        e.insert(0, "phi0", p["phi0"])
+        e.insert(0, "scene", scene)
+        per_impact.append(e)
+        t = p["table"]
+        for _, r in t.iterrows():
+            for d, tag in ((1, "ccw"), (-1, "cw")):
+                sub = e[(e["backend"] == r["backend"]) & (e["direction"] == d)]
+                ref = r[f"eta_{tag}_ref"]
+                mean = r[f"eta_{tag}_mean"]
+                summary.append({"scene": scene, "backend": r["backend"], "direction": d,
+                                "eta_ref": ref, "eta_mean": mean, "eta_std": r[f"eta_{tag}_std"],
+                                "n_impacts": int(sub["eta"].notna().sum()),
+                                "rel_error": mean / ref - 1.0 if pd.notna(mean) and ref
+                                else math.nan})
+    eta = pd.concat(per_impact, ignore_index=True) if per_impact else pd.DataFrame()
+    return eta, pd.DataFrame(summary)
+
+
+def speed_table(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
+    """``speed_accuracy.csv`` from the time-step rows (missing columns NaN)."""
+    speed = pd.DataFrame(list(rows))
+    for c in SPEED_COLUMNS:
+        if c not in speed:
+            speed[c] = math.nan
+    return speed[SPEED_COLUMNS]
+
+
+def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.DataFrame,
+                   omap: pd.DataFrame) -> pd.DataFrame:
+    """``engines.csv``: one row per backend (columns: :data:`CAMPAIGN_COLUMNS`)."""
+    rows = []
+    pulses = metrics[metrics["part"] == "pulse"] if len(metrics) else metrics
+    backends = F._order(pulses["backend"]) if len(pulses) else []
+    for b in backends:
+        s = pulses[pulses["backend"] == b]
+        ok = s[s["status"] == "ok"]
+        nr = ok["nrmse"].astype(float).dropna()
+        pk = ok["peak_rel_error"].astype(float).abs().dropna()
+        es = eta_summary[eta_summary["backend"] == b] if len(eta_summary) else eta_summary
+        er = es["rel_error"].astype(float).abs().dropna() if len(es) else pd.Series(dtype=float)
+        va = ok["verdict_agrees"].dropna().astype(bool)
+        n_agree, n_total = int(va.sum()), len(va)
+        if len(omap):
+            m = omap[(omap["backend"] == b)]["verdict_agrees"].dropna().astype(bool)
+            n_agree += int(m.sum())
+            n_total += len(m)
+        sp = speed[speed["backend"] == b] if len(speed) else speed
+        versions = s["engine_version"].dropna().astype(str)
+        rows.append({
+            "backend": b, "engine_version": versions.iloc[0] if len(versions) else "",
+            "n_cases": len(s), "n_ok": len(ok),
+            "nrmse_median": float(nr.median()) if len(nr) else math.nan,
+            "nrmse_max": float(nr.max()) if len(nr) else math.nan,
+            "peak_rel_error_median": float(pk.median()) if len(pk) else math.nan,
+            "peak_rel_error_max": float(pk.max()) if len(pk) else math.nan,
+            "eta_mean_rel_error": float(er.mean()) if len(er) else math.nan,
+            "verdicts_agree": n_agree, "verdicts_total": n_total,
+            "energy_gained": int(ok["energy_gained_at_impact"].fillna(False).astype(bool).sum()),
+            "real_time_factor_median": float(ok["real_time_factor"].astype(float).median())
+            if len(ok) else math.nan,
+            "run_real_time_factor_median": float(sp["run_real_time_factor"].astype(float)
+                                                 .median()) if len(sp) and
+            "run_real_time_factor" in sp else math.nan,
+        })
+    return pd.DataFrame(rows)

@@ -1,0 +1,401 @@
+"""``rockbench stress``: every backend at the extremes, one axis at a time from the paper's frame.
+
+Each :class:`StressPoint` changes one thing of the paper's asymmetric frame
+(``paper-asymmetric``; the device axes start from ``paper-asymmetric-hybrid``) and runs it with
+the analytic reference and every selected engine at its default settings (the ``dt`` axis
+changes the engines' step). Every point of every engine gives a row (:data:`STRESS_COLUMNS`),
+whatever happens: an invalid scene or setting, an exception, a diverged run each become a row
+with its reason. The row's ``class`` (:data:`rockbench.tradeoff.VERDICTS`):
+
+* ``within 1%`` / ``within 5%`` / ``off`` (> 5 %): the error against the analytic reference:
+  free rocking: the largest eta error of its impacts; a pulse or record the reference survives:
+  |peak error| (max |phi - phi_ref| / alpha when the reference hardly uplifts); one it
+  overturns: |t_overturn error| / T_g (T_g the pulse period; 1 s for a record), and ``off``
+  when the overturning verdicts differ;
+* ``off`` also when the run is ``ok`` but fails a check the Result itself could make
+  (``flags``): a contact slid more than ``TOLERANCES["contacts"]["max_sliding"]`` (2 mm) before
+  the structure fell, energy gained at an impact in free rocking; ``invalid`` when the
+  reference has impacts but the run measured no finite eta (e.g. a too coarse ``output_dt``);
+* ``diverged`` / ``invalid``: the run's status (or an exception: ``invalid`` with its reason);
+* ``outside model``: the point lies outside the analytic model's validity: in most engines that
+  ran, the impacts rebound (a contact the model keeps closed opens and the effective eta
+  exceeds the analytic one by more than 20 %): stocky frames, where the rigid, sticking impact
+  of the model no longer describes the physics. ``model_validity`` says which side of that
+  line every point is on, and ``engine_class`` keeps the engine's own class there.
+
+:func:`stress` (fast by default: a handful of points per axis, about a minute for the three
+engines on two cores; ``full=True``: the whole ranges), :func:`breaking_points` (per engine and
+axis, the first value away from the paper's frame that is not within 5 %), and
+``rockbench.report.tradeoff_figures.plot_stability_map`` (one figure per backend).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+import pandas as pd
+
+from .errors import ParameterError
+from .tradeoff import classify_error
+
+__all__ = ["AXES", "StressPoint", "stress_points", "run_point", "stress", "Stress",
+           "breaking_points", "STRESS_COLUMNS", "synthetic_record", "PAPER_VALUES"]
+
+_BASE = "paper-asymmetric"
+_HYBRID = "paper-asymmetric-hybrid"
+_H = 7.0                 # height of the paper frame's taller column [m]
+_K = 23.5e6              # paper tendon stiffness [N/m]
+_C = 25.3e6              # paper damper constant [N s/m]
+_REBOUND = 0.2           # effective eta above the analytic one by more than this: rebounding
+_PULSE = dict(kind="ricker", shape="symmetric", sign=1)
+
+#: axis -> (meaning and unit, fast values, full values)
+AXES: dict[str, tuple[str, tuple, tuple]] = {
+    "alpha": ("slenderness of the taller column [rad] (column width 7 tan(alpha); free rocking "
+              "from 0.5 alpha)", (0.05, 0.6), (0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6)),
+    "mass_ratio": ("beam / column mass ratio [-] (free rocking from 0.5 alpha)",
+                   (0.1, 100.0), (0.1, 0.3, 1.0, 3.0, 30.0, 100.0)),
+    "H1/H": ("right / left column height [-] (free rocking from 0.5 alpha)", (0.5,),
+             (0.5, 0.6, 0.7, 0.9, 1.0)),
+    "tendon": ("tendon stiffness / the paper's 23.5 MN/m [-] (hybrid frame, symmetric pulse "
+               "A = 7, W = 3)", (0.0, 1000.0), (0.0, 0.1, 10.0, 100.0, 1000.0)),
+    "damper": ("damper constant / the paper's 25.3 MN s/m [-] (hybrid frame, A = 7, W = 3)",
+               (0.0, 10.0), (0.0, 0.3, 3.0, 10.0)),
+    "dt": ("engine time step [s] (symmetric pulse A = 2.5, W = 3)", (1e-2,),
+           (1e-5, 1e-4, 4e-3, 1e-2)),
+    "A": ("pulse amplitude a_g / (g tan alpha) [-] (symmetric pulse, W = 3)", (50.0, 200.0),
+          (1.5, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0)),
+    "W": ("pulse frequency omega_g / p [-] (symmetric pulse, A = 3)", (0.5, 50.0),
+          (0.3, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0)),
+    "record": ("length of a synthetic accelerogram [s] (PGA 2 g tan alpha)", (20.0,),
+               (20.0, 100.0)),
+}
+
+#: The paper frame's value on every axis (the base point).
+PAPER_VALUES: dict[str, float] = {"alpha": 0.1419, "mass_ratio": 10.0, "H1/H": 0.8,
+                                  "tendon": 1.0, "damper": 1.0, "dt": 1e-3, "A": 2.5, "W": 3.0,
+                                  "record": math.nan}
+
+
+@dataclass(frozen=True)
+class StressPoint:
+    """One point of one axis (plain data). ``scene``: a built-in name; ``overrides``: scene
+    overrides (name, value); ``motion``: a Ricker spec as (key, value) pairs, ``("record",
+    length)`` for the synthetic record, or None (free rocking from ``phi0`` x alpha);
+    ``settings``: engine setting overrides; ``duration`` [s] (None: chosen from the motion)."""
+
+    axis: str
+    value: float
+    scene: str
+    overrides: tuple = ()
+    motion: tuple | None = None
+    phi0: float = 0.0
+    settings: tuple = ()
+    duration: float | None = None
+
+    @property
+    def label(self) -> str:
+        return f"{self.axis}={self.value:g}"
+
+
+def _point(axis: str, v: float) -> StressPoint:
+    pulse = lambda A, W: tuple(sorted({**_PULSE, "A": A, "W": W}.items()))  # noqa: E731
+    if axis == "alpha":
+        return StressPoint(axis, v, _BASE, (("column_width", round(_H * math.tan(v), 6)),),
+                           None, 0.5)
+    if axis == "mass_ratio":
+        return StressPoint(axis, v, _BASE, (("mass_ratio", v),), None, 0.5)
+    if axis == "H1/H":
+        return StressPoint(axis, v, _BASE, (("column_height_right", round(_H * v, 6)),), None,
+                           0.5)
+    if axis == "tendon":
+        return StressPoint(axis, v, _HYBRID, (("tendon_stiffness", _K * v),), pulse(7.0, 3.0))
+    if axis == "damper":
+        return StressPoint(axis, v, _HYBRID, (("damping", _C * v),), pulse(7.0, 3.0))
+    if axis == "dt":
+        return StressPoint(axis, v, _BASE, (), pulse(2.5, 3.0), 0.0, (("dt", v),))
+    if axis == "A":
+        return StressPoint(axis, v, _BASE, (), pulse(v, 3.0))
+    if axis == "W":
+        return StressPoint(axis, v, _BASE, (), pulse(3.0, v))
+    if axis == "record":
+        return StressPoint(axis, v, _BASE, (), ("record", v), 0.0, (), v + 5.0)
+    raise ParameterError("axis", axis, f"one of {', '.join(AXES)}")
+
+
+def stress_points(full: bool = False, axes: Sequence[str] | None = None) -> list[StressPoint]:
+    """The points of the fast (default) or ``full`` form, the paper's frame first (as the
+    ``paper`` axis, free rocking from 0.5 alpha and the A = 2.5, W = 3 pulse)."""
+    names = list(AXES) if axes is None else list(axes)
+    for a in names:
+        if a not in AXES:
+            raise ParameterError("axes", a, f"axis names: {', '.join(AXES)}")
+    pts = [StressPoint("paper", 0.0, _BASE, (), None, 0.5),
+           StressPoint("paper", 1.0, _BASE, (), tuple(sorted({**_PULSE, "A": 2.5,
+                                                                "W": 3.0}.items())))]
+    for a in names:
+        for v in AXES[a][2 if full else 1]:
+            pts.append(_point(a, float(v)))
+    return pts
+
+
+def synthetic_record(length: float, structure, pga_over_uplift: float = 2.0, seed: int = 13):
+    """A deterministic synthetic accelerogram of ``length`` [s] (dt 0.01 s): band-limited noise
+    (0.5-5 Hz) under a 2 s rise, flat strong phase to 40 % of the length and exponential decay,
+    scaled to a PGA of ``pga_over_uplift`` x g tan(alpha) (alpha of the taller column)."""
+    from .constants import G
+    from .scene.motion import Record
+
+    dt = 0.01
+    n = int(round(length / dt)) + 1
+    t = np.arange(n) * dt
+    rng = np.random.default_rng(seed)
+    spec = np.fft.rfft(rng.standard_normal(n))
+    f = np.fft.rfftfreq(n, dt)
+    spec[(f < 0.5) | (f > 5.0)] = 0.0
+    a = np.fft.irfft(spec, n)
+    t_strong = 0.4 * length
+    env = np.where(t < 2.0, t / 2.0, np.where(t < t_strong, 1.0,
+                                              np.exp(-(t - t_strong) / (0.1 * length))))
+    a = a * env
+    a *= pga_over_uplift * G * math.tan(structure.alpha) / np.max(np.abs(a))
+    return Record(t, a, name=f"synthetic-{length:g}s", source="rockbench.stress")
+
+
+def _load(pt: StressPoint):
+    """(scene, motion, duration) of a point; raises for an invalid scene."""
+    from .scene.motion import motion_from_spec
+    from .scene.scene import load_scene
+    from .tradeoff import _free_duration
+
+    scene = load_scene(pt.scene, dict(pt.overrides) or None)
+    fall = min(4.0 * scene.alpha, min(scene.fall_angles.values()))
+    scene = scene.replace(fall_angle=fall)
+    if pt.motion is None:
+        phi0 = pt.phi0 * scene.alpha
+        return scene, None, min(10.0, _free_duration(scene, phi0)), phi0
+    if pt.motion[0] == "record":
+        rec = synthetic_record(float(pt.motion[1]), scene.structure)
+        return scene, rec, pt.duration, 0.0
+    spec = dict(pt.motion)
+    if spec.get("A", 0.0) > 100.0:
+        # beyond the A limit of rockbench.limits (a guard against input mistakes): the same
+        # pulse given by its amplitude a_g = A g tan(alpha) [m/s^2] and period 2 pi / (W p) [s]
+        from .constants import G
+        A, W = spec.pop("A"), spec.pop("W")
+        spec.update(amplitude=A * G * math.tan(scene.alpha), period=2 * math.pi / (W * scene.p))
+    motion = motion_from_spec(spec, scene.structure)
+    dur = pt.duration or (max(2.5, 2 * motion.period) + 3 * motion.period)
+    return scene, motion, dur, 0.0
+
+
+# =========================================================================================
+# Rows
+# =========================================================================================
+#: Columns of :attr:`Stress.table`.
+STRESS_COLUMNS: dict[str, str] = {
+    "engine": "-, backend name",
+    "axis": "-, what changes (AXES; 'paper': the paper's frame itself)",
+    "value": "-, the axis value (unit in AXES)",
+    "status": "-, the run's status (ok | diverged | invalid; invalid also for an exception)",
+    "reason": "-, why not ok, or the exception",
+    "class": "-, within 1% | within 5% | off | diverged | invalid | outside model",
+    "engine_class": "-, the class from this engine's run alone (before the validity check)",
+    "error": "-, relative error against the analytic reference (see the module docstring)",
+    "flags": "-, checks an ok run fails: sliding, energy gained, eta not measured",
+    "model_validity": "-, inside | outside (why) the analytic model's validity at this point",
+    "peak_rel_error": "-, max|phi| / max|phi_ref| - 1",
+    "eta_ratio_max": "-, largest measured eta / analytic eta over the run's impacts",
+    "overturned": "-, the run overturned", "overturned_ref": "-, the reference overturned",
+    "t_overturn_error": "s, t_overturn - t_overturn_ref",
+    "max_sliding": "m, largest contact slip", "contact_opened": "-, a contact the model keeps "
+                                                                "closed opened",
+    "ref_status": "-, status of the analytic reference run",
+    "cpu_s": "s, process CPU time of the engine run",
+    "sim_time": "s, simulated time of the engine run",
+}
+
+
+def _row(engine: str, pt: StressPoint) -> dict[str, Any]:
+    row = {c: math.nan for c in STRESS_COLUMNS}
+    row.update(engine=engine, axis=pt.axis, value=pt.value, status="invalid", reason="",
+               flags="", model_validity="", overturned=None, overturned_ref=None,
+               contact_opened=None, ref_status="")
+    return row
+
+
+def run_point(item: tuple[str, StressPoint]) -> dict[str, Any]:
+    """Run one engine on one point against the analytic reference; never raises."""
+    import time
+
+    from .compare import TOLERANCES, metrics
+    from .runner import run
+
+    engine, pt = item
+    row = _row(engine, pt)
+    try:
+        scene, motion, dur, phi0 = _load(pt)
+        ref = run(scene, motion, engine="analytic", duration=dur, phi0=phi0)
+        row["ref_status"] = ref.status
+        c0 = time.process_time()
+        from .tradeoff import Setting, _run_overrides
+        over = _run_overrides(Setting(engine, tuple(pt.settings)))
+        res = run(scene, motion, engine=engine, duration=dur, phi0=phi0, **over)
+        row["cpu_s"] = time.process_time() - c0
+        row["sim_time"] = float(res.cost.sim_time)
+    except Exception as e:  # an invalid scene, setting or an engine failure: a row, not a crash
+        row.update(status="invalid", reason=f"{type(e).__name__}: {e}", error=math.inf)
+        row["engine_class"] = row["class"] = "invalid"
+        return row
+    m = metrics(res, ref)
+    row.update(status=res.status, reason=res.summary.reason or "")
+    for k in ("peak_rel_error", "overturned", "overturned_ref", "t_overturn_error",
+              "max_sliding", "contact_opened"):
+        row[k] = m.get(k)
+    from .analytic.reference import reference_of
+    eta_ref = reference_of(scene).eta
+    imp = res.impacts()
+    ratios = [float(e) / float(eta_ref[int(d)]) for e, d in zip(imp["eta"], imp["direction"])
+              if int(d) in eta_ref and np.isfinite(e)]
+    row["eta_ratio_max"] = max(ratios) if ratios else math.nan
+    if not res.ok:
+        row["error"] = math.inf
+        row["engine_class"] = row["class"] = classify_error(math.inf, res.status)
+        return row
+    if not ref.ok:
+        row.update(error=math.nan, reason=f"reference {ref.status}: {ref.summary.reason}")
+        row["engine_class"] = row["class"] = "invalid"
+        return row
+    flags = []
+    invalid = False
+    n_ref_imp = int(ref.summary.n_impacts)
+    if n_ref_imp and len(imp) and not ratios:
+        flags.append("no finite eta measured (output_dt too coarse?)")
+        invalid = True
+    slide_bar = TOLERANCES["contacts"]["max_sliding"]
+    if math.isfinite(m["max_sliding"]) and m["max_sliding"] > slide_bar:
+        flags.append(f"sliding {1e3 * m['max_sliding']:.3g} mm > {1e3 * slide_bar:g} mm")
+    if motion is None and bool(m.get("energy_gained_at_impact")):
+        flags.append("energy gained at an impact")
+    period = float(getattr(motion, "period", 1.0)) if motion is not None else 1.0
+    if bool(m["overturned_ref"]):
+        if not bool(m["verdict_agrees"]):
+            err = math.inf
+        else:
+            err = abs(float(m["t_overturn_error"])) / period
+    elif motion is None:
+        err = float(m["eta_max_rel_error"]) if math.isfinite(m["eta_max_rel_error"]) else (
+            math.inf if invalid else 0.0)
+    else:
+        if not bool(m["verdict_agrees"]):
+            err = math.inf
+        else:
+            err = abs(float(m["peak_rel_error"]))
+            if not math.isfinite(err) or ref.summary.max_abs_phi_over_alpha < 0.05:
+                err = float(m["max_abs_error_over_alpha"])
+    row["error"] = err
+    row["flags"] = "; ".join(flags)
+    cls = classify_error(err, "ok")
+    if invalid:
+        cls = "invalid"
+    elif flags and cls in ("within 1%", "within 5%"):
+        cls = "off"
+    row["engine_class"] = row["class"] = cls
+    return row
+
+
+def _crashed(item, reason: str) -> dict[str, Any]:
+    engine, pt = item
+    row = _row(engine, pt)
+    row.update(reason=reason, error=math.inf)
+    row["engine_class"] = row["class"] = "invalid"
+    return row
+
+
+def _validity(df: pd.DataFrame) -> pd.DataFrame:
+    """Mark the points where most engines' impacts rebound as outside the model's validity."""
+    df = df.copy()
+    for (axis, value), g in df.groupby(["axis", "value"], sort=False):
+        ok = g[g["status"] == "ok"]
+        reb = ok[(ok["contact_opened"].fillna(False).astype(bool))
+                 & (ok["eta_ratio_max"].astype(float) > 1 + _REBOUND)]
+        if len(ok) and 2 * len(reb) > len(ok):
+            why = (f"outside: impacts rebound in {len(reb)} of {len(ok)} engines (effective "
+                   f"eta up to {reb['eta_ratio_max'].max():.2f} x the analytic, contacts open)")
+            df.loc[g.index, "model_validity"] = why
+            df.loc[g.index, "class"] = "outside model"
+        else:
+            df.loc[g.index, "model_validity"] = "inside"
+    return df
+
+
+@dataclass
+class Stress:
+    """The stress sweep: ``table`` (one row per engine and point, :data:`STRESS_COLUMNS`),
+    ``full`` (which form), ``unavailable`` (engine -> why)."""
+
+    table: pd.DataFrame
+    full: bool = False
+    unavailable: dict[str, str] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        from .result import _jsonable
+
+        recs = self.table.astype(object).where(self.table.notna(), None).to_dict("records")
+        return _jsonable({"full": self.full, "unavailable": self.unavailable,
+                          "axes": {k: v[0] for k, v in AXES.items()},
+                          "breaking_points": breaking_points(self.table).to_dict("records"),
+                          "rows": recs, "columns": STRESS_COLUMNS})
+
+
+def stress(engines: Sequence[str] | None = None, *, full: bool = False,
+           axes: Sequence[str] | None = None, points: Sequence[StressPoint] | None = None,
+           executor: str = "process", workers: int | None = None,
+           progress: bool = False) -> Stress:
+    """Run every point (:func:`stress_points`, or ``points``) with every engine (default: the
+    available engines) through the one executor; return a :class:`Stress`."""
+    from .engines import get_backend
+    from .runner import REFERENCE, resolve_engines
+    from .sweep.executors import execute
+
+    names = [n for n in resolve_engines(engines) if n != REFERENCE]
+    unavailable = {}
+    usable = []
+    for n in names:
+        ok, why = get_backend(n).available()
+        (usable.append(n) if ok else unavailable.__setitem__(n, why))
+    pts = list(points) if points is not None else stress_points(full, axes)
+    items = [(f"{i}", (n, p)) for i, (n, p) in enumerate((n, p) for p in pts for n in usable)]
+    rows: dict[str, dict] = {}
+    execute(run_point, items, on_result=lambda k, r: rows.__setitem__(k, r), crashed=_crashed,
+            label=lambda it: f"{it[0]} {it[1].label}",
+            is_error=lambda r: r["class"] in ("diverged", "invalid"), executor=executor,
+            workers=workers, progress=progress, desc="stress", unit="run")
+    df = pd.DataFrame([rows[k] for k, _ in items], columns=list(STRESS_COLUMNS))
+    return Stress(table=_validity(df), full=full, unavailable=unavailable)
+
+
+def breaking_points(table: pd.DataFrame) -> pd.DataFrame:
+    """Per engine and axis, the first value, going away from the paper's frame on either side,
+    whose class is off, diverged or invalid (columns engine, axis, side ("below" / "above" the
+    paper's value), value, class, reason); points outside the model's validity are skipped."""
+    bad = ("off", "diverged", "invalid")
+    out = []
+    for (eng, axis), g in table.groupby(["engine", "axis"], sort=False):
+        if axis == "paper":
+            continue
+        p = PAPER_VALUES.get(axis, math.nan)
+        g = g.sort_values("value")
+        for side, sub in (("below", g[g["value"] < p].iloc[::-1]), ("above", g[g["value"] > p])
+                          ) if math.isfinite(p) else (("all", g),):
+            for _, r in sub.iterrows():
+                if r["class"] in bad:
+                    out.append({"engine": eng, "axis": axis, "side": side,
+                                "value": float(r["value"]), "class": r["class"],
+                                "reason": r["reason"] or r["flags"] or
+                                f"error {r['error']:.3g}"})
+                    break
+    return pd.DataFrame(out, columns=["engine", "axis", "side", "value", "class", "reason"])

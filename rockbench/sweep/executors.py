@@ -1,0 +1,190 @@
+"""The one executor: run a picklable function over many items, serially, on a process pool or
+on a Dask cluster, handing every result to the caller as soon as it finishes.
+
+:func:`execute` is what sweeps (:func:`rockbench.sweep.run_cases`) and the campaign use:
+
+* ``"serial"``: in this process, one after the other (debugging, profiling);
+* ``"process"``: ``concurrent.futures.ProcessPoolExecutor`` with at most ``workers`` items in
+  flight, so that the progress bar names exactly the running items and a worker that *dies*
+  (a segfault in an engine, the out-of-memory killer: ``BrokenProcessPool``) implicates only
+  those items: they are run again one by one, each in a fresh process, and the culprit's result
+  is ``crashed(item, reason)``;
+* ``"dask"``: ``dask.distributed`` (``pip install 'rockbench[dask]'``): a ``Client`` to
+  ``dask_address``, or a ``LocalCluster`` of ``workers`` single-threaded processes started and
+  closed here; a task that kills its worker gives ``crashed(item, reason)``.
+
+``fn`` must not raise for a failure of the work itself (turn it into a result): an exception
+that escapes stops the run. Ctrl-C cancels the queued items at once; results already handed to
+``on_result`` (and stored by the caller) are kept.
+"""
+
+from __future__ import annotations
+
+import os
+from collections import deque
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from ..errors import ParameterError, RockbenchError
+
+__all__ = ["EXECUTORS", "execute", "check_options", "cpu_count"]
+
+#: Executors accepted by :func:`execute` (and :func:`rockbench.sweep.run_cases`).
+EXECUTORS = ("process", "serial", "dask")
+
+Item = tuple[str, Any]
+
+
+def cpu_count() -> int:
+    """Cores this process may run on (affinity), at least 1."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def check_options(executor: str, workers: int | None, dask_address: str | None) -> None:
+    """ParameterError for an unknown executor, a bad ``workers`` or an address without Dask."""
+    if executor not in EXECUTORS:
+        raise ParameterError("executor", executor, f"one of {', '.join(EXECUTORS)}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
+        raise ParameterError("workers", workers, "an integer >= 1 or None")
+    if dask_address is not None and executor != "dask":
+        raise ParameterError("dask_address", dask_address, "given only with executor='dask'")
+
+
+def _crash_reason(e: BaseException) -> str:
+    return f"worker process died while running this case (segfault or out of memory?): {e}"
+
+
+def execute(fn: Callable[[Any], Any], items: Sequence[Item], *,
+            on_result: Callable[[str, Any], None], crashed: Callable[[Any, str], Any],
+            label: Callable[[Any], str] = str, is_error: Callable[[Any], bool] | None = None,
+            executor: str = "process", workers: int | None = None,
+            dask_address: str | None = None, progress: bool = True, desc: str = "sweep",
+            unit: str = "case") -> None:
+    """Run ``fn(item)`` for every ``(key, item)`` of ``items``; call ``on_result(key, result)``
+    in this process as each one finishes (in completion order).
+
+    ``crashed(item, reason)`` is the result of an item whose worker died; ``label(item)`` names
+    an item on the tqdm bar (``progress``; its description ``desc`` counts the results for which
+    ``is_error(result)`` is true). ``workers`` defaults to the available cores.
+    """
+    check_options(executor, workers, dask_address)
+    items = list(items)
+    if not items:
+        return
+    bar = None
+    n_err = [0]
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(items), desc=desc, unit=unit, dynamic_ncols=True)
+
+    def done(k: str, result: Any) -> None:
+        on_result(k, result)
+        if bar is not None:
+            bar.update(1)
+            if is_error is not None and is_error(result):
+                n_err[0] += 1
+                bar.set_description(f"{desc} ({n_err[0]} error{'s' if n_err[0] > 1 else ''})")
+
+    def show(text: str, refresh: bool = True) -> None:
+        if bar is not None:
+            bar.set_postfix_str(text, refresh=refresh)
+
+    try:
+        n_workers = min(workers or cpu_count(), len(items))
+        if executor == "serial":
+            for k, item in items:
+                show(label(item))
+                done(k, fn(item))
+        elif executor == "process":
+            _pool(fn, items, n_workers, done, show, label, crashed)
+        else:
+            _dask(fn, items, workers, dask_address, done, show, label, crashed)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _pool(fn, items: list[Item], workers: int, done, show, label, crashed) -> None:
+    """A process pool with at most ``workers`` items in flight; a dead pool makes every item in
+    flight a suspect, rerun alone (:func:`_isolated`)."""
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
+
+    queue = deque(items)
+    inflight: dict[Any, Item] = {}
+    ex = ProcessPoolExecutor(max_workers=workers)
+    try:
+        while queue or inflight:
+            while queue and len(inflight) < workers:
+                k, item = queue.popleft()
+                inflight[ex.submit(fn, item)] = (k, item)
+            show(" | ".join(label(item) for _, item in inflight.values()))
+            finished, _ = wait(list(inflight), return_when=FIRST_COMPLETED)
+            suspects: list[Item] = []
+            for f in finished:
+                k, item = inflight.pop(f)
+                try:
+                    result = f.result()
+                except BrokenProcessPool:
+                    suspects.append((k, item))
+                    continue
+                done(k, result)
+            if suspects:
+                # the pool is dead: every item still in flight is a suspect
+                suspects.extend(inflight.values())
+                inflight.clear()
+                ex.shutdown(wait=True, cancel_futures=True)
+                for k, item in suspects:
+                    show(f"isolating {label(item)}")
+                    done(k, _isolated(fn, item, crashed))
+                ex = ProcessPoolExecutor(max_workers=workers)
+    finally:
+        # on Ctrl-C: drop the queued items at once (finished ones are already handed over)
+        ex.shutdown(wait=False, cancel_futures=True)
+
+
+def _isolated(fn, item: Any, crashed) -> Any:
+    """Run one item in a fresh single-worker process pool; a dying worker -> ``crashed``."""
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    with ProcessPoolExecutor(max_workers=1) as ex:
+        try:
+            return ex.submit(fn, item).result()
+        except BrokenProcessPool as e:
+            return crashed(item, _crash_reason(e))
+
+
+def _dask(fn, items: list[Item], workers: int | None, address: str | None, done, show, label,
+          crashed) -> None:
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise RockbenchError("executor='dask' needs dask.distributed: "
+                             "pip install 'rockbench[dask]'") from None
+    cluster = None
+    if address:
+        client = Client(address)
+    else:
+        cluster = LocalCluster(n_workers=workers or cpu_count(), threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futs = {client.submit(fn, item, key=f"rockbench-{k}", pure=False): (k, item)
+                for k, item in items}
+        for f in as_completed(list(futs)):
+            k, item = futs[f]
+            try:
+                result = f.result()
+            except Exception as e:  # e.g. KilledWorker: the item killed its worker
+                result = crashed(item, f"{type(e).__name__}: {e}")
+            show(f"done {label(item)}", refresh=False)
+            done(k, result)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,209 @@
+"""Running cases: one case -> one row (:func:`run_case`), many -> a frame (:func:`run_cases`),
+through the one executor and the one store."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from . import store as S
+from .cases import case_id, case_label, flatten_case, normalize_case
+from .executors import check_options, execute
+
+__all__ = ["run_case", "run_cases", "TIMING_COLUMNS"]
+
+#: Row columns that depend on the machine and the moment, not on the physics (leave them out
+#: when comparing two sweeps).
+TIMING_COLUMNS = ("wall_s", "real_time_factor", "run_s", "finished_at")
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def _result_fields(result) -> dict[str, Any]:
+    s, c = result.summary, result.cost
+    imp = result.impacts()
+    row: dict[str, Any] = {"status": s.status, "reason": s.reason or ""}
+    for k in ("max_abs_phi", "max_abs_phi_over_alpha", "overturned", "t_overturn",
+              "exceeded_critical", "uplifted", "t_uplift", "n_impacts", "fractured",
+              "t_fracture", "max_penetration", "max_sliding", "contact_opened"):
+        v = getattr(s, k)
+        row[k] = v.item() if isinstance(v, np.generic) else v
+    for d, tag in ((1, "ccw"), (-1, "cw")):
+        e = imp.loc[imp["direction"] == d, "eta"].to_numpy(dtype=float)
+        e = e[np.isfinite(e)]
+        row[f"eta_{tag}_mean"] = float(e.mean()) if e.size else math.nan
+    row.update(wall_s=float(c.wall_s), sim_time=float(c.sim_time), steps=int(c.steps),
+               rhs_calls=int(c.rhs_calls), real_time_factor=float(c.real_time_factor))
+    version = result.settings.get("engine_version") if isinstance(result.settings, dict) else None
+    if not version:
+        from ..engines import get_backend
+        ok, info = get_backend(result.backend).available()
+        version = info if ok else ""
+    row["engine_version"] = str(version)
+    return row
+
+
+def _base_row(norm: dict[str, Any]) -> dict[str, Any]:
+    row = {"case_id": case_id(norm)}
+    row.update(flatten_case(norm))
+    row["case"] = json.dumps(norm, sort_keys=True)
+    return row
+
+
+def _error_row(norm: dict[str, Any], reason: str) -> dict[str, Any]:
+    row = _base_row(norm)
+    row.update(status="error", reason=reason, run_s=math.nan, finished_at=_now())
+    return row
+
+
+def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
+    """Run one case; return its row (never raises for a failure of the run itself: an
+    exception becomes status ``"error"`` with ``reason`` = the exception's type and message).
+
+    Row keys: ``case_id``, the flattened case, ``status``, ``reason``, the Result's summary
+    (``max_abs_phi`` [rad], ``max_abs_phi_over_alpha``, ``overturned``, ``t_overturn`` [s], ...),
+    mean eta per direction, cost (``wall_s`` [s], ``sim_time`` [s], ``steps``, ``rhs_calls``,
+    ``real_time_factor``), ``engine_version``, ``run_s`` [s] (the whole case, building
+    included), ``finished_at`` (UTC, ISO 8601) and ``case`` (the normalized case as JSON).
+    """
+    norm = normalize_case(case)
+    row = _base_row(norm)
+    t = time.perf_counter()
+    try:
+        from ..runner import run
+        from ..scene.motion import motion_from_spec
+        from ..scene.scene import load_scene
+
+        scene = load_scene(norm["scene"], norm["overrides"] or None)
+        motion = motion_from_spec(norm["motion"], scene.structure)
+        result = run(scene, motion, engine=norm["engine"], duration=norm["duration"],
+                     phi0=norm["phi0"], **norm["settings"])
+        row.update(_result_fields(result))
+    except Exception as e:  # a failing case is data, not a crash of the sweep
+        row.update(status="error", reason=f"{type(e).__name__}: {e}")
+    row["run_s"] = time.perf_counter() - t
+    row["finished_at"] = _now()
+    return row
+
+
+def _run_normalized(norm: dict[str, Any]) -> dict[str, Any]:
+    """What the executor runs: :func:`run_case` looked up at call time (so that it can be
+    replaced, e.g. by a test)."""
+    return run_case(norm)
+
+
+# =========================================================================================
+# The frame
+# =========================================================================================
+_FIRST = ["case_id"]
+_RESULT_ORDER = ["status", "reason", "max_abs_phi", "max_abs_phi_over_alpha", "overturned",
+                 "t_overturn", "exceeded_critical", "uplifted", "t_uplift", "n_impacts",
+                 "fractured", "t_fracture", "eta_ccw_mean", "eta_cw_mean", "max_penetration",
+                 "max_sliding", "contact_opened", "wall_s", "sim_time", "steps", "rhs_calls",
+                 "real_time_factor", "engine_version", "run_s", "finished_at", "case"]
+_INT_COLS = ("n_impacts", "steps", "rhs_calls", "motion.sign")
+_BOOL_COLS = ("overturned", "exceeded_critical", "uplifted", "fractured", "contact_opened")
+_FLOAT_COLS = ("phi0", "duration", "max_abs_phi", "max_abs_phi_over_alpha", "t_overturn",
+               "t_uplift", "t_fracture", "eta_ccw_mean", "eta_cw_mean", "max_penetration",
+               "max_sliding", "wall_s", "sim_time", "real_time_factor", "run_s")
+
+
+def _missing(v: Any) -> bool:
+    return v is None or v is pd.NA or (isinstance(v, float) and math.isnan(v))
+
+
+def _tidy(df: pd.DataFrame) -> pd.DataFrame:
+    """Column dtypes that survive missing values: counts Int64, flags boolean, times float64
+    (missing = <NA> / NaN, e.g. on an error row)."""
+    for c in df.columns:
+        vals = [v for v in df[c].tolist() if not _missing(v)]
+        if c in _INT_COLS and all(float(v) == int(v) for v in vals):
+            df[c] = pd.array([None if _missing(v) else int(v) for v in df[c]], dtype="Int64")
+        elif c in _BOOL_COLS:
+            df[c] = pd.array([None if _missing(v) else bool(v) for v in df[c]],
+                             dtype="boolean")
+        elif c in _FLOAT_COLS:
+            df[c] = pd.to_numeric(pd.Series([math.nan if _missing(v) else v for v in df[c]],
+                                            index=df.index), errors="coerce").astype("float64")
+    return df
+
+
+def _frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
+    df = pd.DataFrame(rows)
+    if df.empty:
+        return df
+    case_cols = [c for c in df.columns if c not in _FIRST and c not in _RESULT_ORDER]
+    order = _FIRST + case_cols + [c for c in _RESULT_ORDER if c in df.columns]
+    return _tidy(df[order].reset_index(drop=True))
+
+
+# =========================================================================================
+# run_cases
+# =========================================================================================
+def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = None,
+              executor: str = "process", workers: int | None = None,
+              dask_address: str | None = None, progress: bool = True,
+              retry_errors: bool = False) -> pd.DataFrame:
+    """Run every case and return one row per case, in input order (``docs/sweeps.md``).
+
+    Parameters
+    ----------
+    cases : list of dict (:mod:`rockbench.sweep.cases`)
+    store : path of a directory, optional
+        Resumable store (:mod:`rockbench.sweep.store`): cases already in it are not run again,
+        each newly finished case is written to it at once.
+    executor : {"process", "serial", "dask"} (:mod:`rockbench.sweep.executors`)
+    workers : int, optional
+        Worker processes (default: the available cores); for ``"dask"`` without an address,
+        the LocalCluster's workers.
+    dask_address : str, optional
+        Scheduler address of a running Dask cluster (``executor="dask"`` only).
+    progress : bool
+        Show a tqdm bar naming the running cases.
+    retry_errors : bool
+        Run again the cases the store holds with status ``"error"``.
+
+    Columns: ``case_id``, the flattened case (``scene``, ``overrides.<k>``, ``engine``,
+    ``settings.<k>``, ``motion.kind``, ``motion.<k>``, ``phi0`` [rad], ``duration`` [s]), then
+    the run's fields (see :func:`run_case`). :data:`TIMING_COLUMNS` vary from run to run.
+    """
+    check_options(executor, workers, dask_address)
+    norms = [normalize_case(c) for c in cases]
+    ids = [case_id(n) for n in norms]
+
+    done: dict[str, dict[str, Any]] = {}
+    directory = None
+    if store is not None:
+        S.need_pyarrow()
+        directory = S.store_dir(store)
+        for rec in S.load_store(directory).to_dict("records"):
+            if retry_errors and rec.get("status") == "error":
+                continue
+            done[rec["case_id"]] = rec
+
+    todo: dict[str, dict[str, Any]] = {}
+    for cid, n in zip(ids, norms, strict=True):
+        if cid not in done and cid not in todo:
+            todo[cid] = n
+
+    def on_result(cid: str, row: dict[str, Any]) -> None:
+        done[cid] = row
+        if directory is not None:
+            S.write_row(directory, row)
+
+    execute(_run_normalized, list(todo.items()), on_result=on_result, crashed=_error_row,
+            label=case_label, is_error=lambda row: row.get("status") == "error",
+            executor=executor, workers=workers, dask_address=dask_address, progress=progress,
+            desc="sweep", unit="case")
+    if directory is not None and todo:
+        S.compact(directory)
+    return _frame([done[cid] for cid in ids])

@@ -1,0 +1,208 @@
+"""The one result store: finished work kept on disk, resumable, keyed by the code that made it.
+
+Two kinds of entries, one key scheme (:func:`key`: SHA-256 of the canonical JSON of a plain-data
+item, 16 hex digits) and one writing rule (a temporary name, then an atomic ``os.replace``: a
+file in the store is always complete; a killed process leaves only a ``.tmp-*`` file, ignored):
+
+* **rows** (sweeps): ``DIR/part-<case_id>.parquet``, one row each (:func:`write_row`), merged
+  at the end of a sweep into one ``compact-<uuid>.parquet`` (:func:`compact`);
+  :func:`load_store` returns every row (the latest per case id). Why Parquet parts and not one
+  appended CSV: cases of one sweep may have different keys (overrides, record vs pulse), which
+  a fixed CSV header cannot hold; a killed process can leave a half-written CSV line; and types
+  (bool, int, None) survive. Needs ``pyarrow`` (``pip install 'rockbench[parquet]'``).
+* **payloads** (the campaign's comparisons: tables and thinned histories): one pickle per item,
+  ``DIR/<key>.pkl`` (:func:`write_payload`, :func:`load_payload`).
+
+:func:`code_fingerprint` hashes what decides a run's physics; the campaign keeps its store
+under ``<store>/<fingerprint>/`` (``cases/`` for rows, ``comparisons/`` for payloads) so that
+results of other code are never mixed in.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import math
+import os
+import pickle
+import uuid
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..errors import ParameterError, RockbenchError
+
+__all__ = ["key", "canonical", "code_fingerprint", "store_dir", "need_pyarrow", "have_pyarrow",
+           "write_row", "load_store", "compact", "write_payload", "load_payload"]
+
+
+# =========================================================================================
+# Keys
+# =========================================================================================
+def canonical(x: Any) -> Any:
+    """Numbers as floats (so that 3, 3.0 and numpy.float64(3) hash alike), recursively."""
+    if isinstance(x, dict):
+        return {k: canonical(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [canonical(v) for v in x]
+    if isinstance(x, bool) or x is None or isinstance(x, str):
+        return x
+    return float(x)
+
+
+def key(item: Any) -> str:
+    """The store key of a plain-data item: the first 16 hex digits of the SHA-256 of its
+    canonical JSON (keys sorted): the same item gets the same key in any process, on any
+    machine, in any key order."""
+    text = json.dumps(canonical(item), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@functools.lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """A short hash of what decides a run's physics: rockbench's source files (modules and
+    scenarios, except the report, command-line, testing and campaign layers) and the versions
+    of the installed engines."""
+    import rockbench
+
+    from ..engines import engine_info
+
+    root = Path(rockbench.__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*")):
+        rel = f.relative_to(root).as_posix()
+        if (not f.is_file() or f.suffix not in (".py", ".toml")
+                or rel.split("/")[0] in ("report", "testing")
+                or rel in ("cli.py", "__main__.py", "campaign.py")):
+            continue
+        h.update(rel.encode())
+        h.update(f.read_bytes())
+    h.update(json.dumps(engine_info(), sort_keys=True, default=str).encode())
+    return h.hexdigest()[:12]
+
+
+# =========================================================================================
+# Files
+# =========================================================================================
+def store_dir(store: str | os.PathLike) -> Path:
+    """``store`` as a Path; ParameterError when it exists and is not a directory."""
+    p = Path(store)
+    if p.exists() and not p.is_dir():
+        raise ParameterError("store", str(store), "a directory (created if missing)")
+    return p
+
+
+def have_pyarrow() -> bool:
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def need_pyarrow() -> None:
+    if not have_pyarrow():
+        raise RockbenchError("a sweep store is written in Parquet and needs pyarrow: "
+                             "pip install 'rockbench[parquet]'")
+
+
+def _atomic(path: Path, write) -> Path:
+    """Call ``write(tmp)`` on a temporary name beside ``path``, then rename it to ``path``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".tmp-{path.stem}-{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix}")
+    try:
+        write(tmp)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    os.replace(tmp, path)
+    return path
+
+
+# =========================================================================================
+# Rows: a directory of small Parquet files
+# =========================================================================================
+def _parquet_safe(df: pd.DataFrame) -> pd.DataFrame:
+    """Object columns that mix Python types (e.g. an override given as 0.01 in one case and
+    "none" in another) become strings, so that Arrow can write them."""
+    df = df.copy()
+    for c in df.columns:
+        if df[c].dtype == object:
+            kinds = {type(v) for v in df[c] if v is not None and not (isinstance(v, float)
+                                                                        and math.isnan(v))}
+            if {int, float} >= kinds:
+                continue
+            if len(kinds) > 1:
+                df[c] = [None if v is None or (isinstance(v, float) and math.isnan(v)) else str(v)
+                         for v in df[c]]
+    return df
+
+
+def write_row(directory: Path, row: dict[str, Any]) -> Path:
+    """Write one row to ``directory/part-<case_id>.parquet`` atomically."""
+    return _atomic(directory / f"part-{row['case_id']}.parquet",
+                   lambda tmp: _parquet_safe(pd.DataFrame([row])).to_parquet(tmp, index=False))
+
+
+def _store_files(directory: Path) -> list[Path]:
+    if not directory.is_dir():
+        return []
+    compacted = sorted(directory.glob("compact-*.parquet"), key=lambda p: p.stat().st_mtime)
+    parts = sorted(directory.glob("part-*.parquet"), key=lambda p: p.stat().st_mtime)
+    return compacted + parts
+
+
+def load_store(store: str | os.PathLike) -> pd.DataFrame:
+    """Every row of a sweep store (one per case id; the latest wins), or an empty frame."""
+    need_pyarrow()
+    d = store_dir(store)
+    frames = []
+    for f in _store_files(d):
+        try:
+            frames.append(pd.read_parquet(f))
+        except Exception:  # an unreadable file: its cases simply run again
+            continue
+    frames = [f for f in frames if len(f)]
+    if not frames:
+        return pd.DataFrame(columns=["case_id"])
+    df = pd.concat(frames, ignore_index=True)
+    return df.drop_duplicates("case_id", keep="last").reset_index(drop=True)
+
+
+def compact(directory: Path) -> None:
+    """Merge the store's files into one ``compact-<uuid>.parquet`` (written atomically before
+    the merged files are removed; an interruption leaves duplicates, which loading drops)."""
+    files = _store_files(directory)
+    if len(files) < 2:
+        return
+    df = _parquet_safe(load_store(directory))
+    try:
+        _atomic(directory / f"compact-{uuid.uuid4().hex[:12]}.parquet",
+                lambda tmp: df.to_parquet(tmp, index=False))
+    except Exception:  # keep the parts: correct, only slower to load
+        return
+    for f in files:
+        f.unlink(missing_ok=True)
+
+
+# =========================================================================================
+# Payloads: one pickle per item
+# =========================================================================================
+def write_payload(directory: Path, item_key: str, payload: Any) -> Path:
+    """Write ``payload`` to ``directory/<item_key>.pkl`` atomically."""
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as f:
+            pickle.dump(payload, f, protocol=pickle.HIGHEST_PROTOCOL)
+
+    return _atomic(directory / f"{item_key}.pkl", write)
+
+
+def load_payload(directory: Path, item_key: str) -> Any:
+    """The payload stored under ``item_key``, or None (missing or unreadable: run it again)."""
+    try:
+        with open(directory / f"{item_key}.pkl", "rb") as f:
+            return pickle.load(f)
+    except Exception:
+        return None

@@ -1,0 +1,803 @@
+"""Work-precision: how accurate each engine is on a scene, at each setting, and at what cost.
+
+:func:`tradeoff` runs a fixed **validation set** (:func:`validation_set`) of a scene with every
+selected engine at every setting (by default the time steps :data:`DEFAULT_DTS`), with
+repeats, and measures
+
+* **accuracy against the analytic reference** (:func:`rockbench.compare.metrics` on every run):
+  worst and median |peak error| over the surviving pulses, worst and median nrmse, worst and
+  median eta error over the free-rocking runs, overturning-verdict agreement;
+* **self-consistency** (Erez, Tassa & Todorov 2015, "Simulation tools for model-based robotics"):
+  every setting against the same engine at a step four times smaller (``dt / 4``), on the same
+  cases. The difference is the engine's *discretisation* error; what remains of the error against
+  the analytic model once that is small is *model* error (the engine converges to something
+  else than the rigid-impact model);
+* **cost** as process CPU time (:func:`time.process_time`, user + system time of the worker
+  process, all threads: the engines run on one thread) of the whole run (building the model,
+  stepping, the Python loop and the post-processing into a Result), divided by the simulated
+  time: CPU seconds per simulated second, the median of ``repeat`` runs with its min-max spread,
+  and the CPU real-time factor (simulated seconds per CPU second, the inverse). CPU time, unlike
+  wall time, does not change with the load of a shared machine, so the ranking is stable.
+
+Output: a :class:`Tradeoff` with ``runs`` (one row per engine, setting and case:
+:data:`RUN_COLUMNS`) and ``table`` (one row per engine and setting: :data:`TABLE_COLUMNS`);
+``rockbench.report.tradeoff_figures.plot_work_precision(t.table)`` draws the work-precision
+diagram.
+
+The **worst validation error** (``worst_error``, what ``rockbench advise`` compares with a
+tolerance) of a setting is the largest of: |peak error| of every surviving pulse, the eta error
+of every free-rocking impact (:func:`rockbench.compare.metrics`' ``eta_max_rel_error``); it is
+infinite when a run is not ``ok`` or gets the overturning verdict wrong. Errors are relative
+(0.02 = 2 %).
+
+Runs go through :func:`rockbench.runner.run` and the one executor
+(:func:`rockbench.sweep.executors.execute`: serial, process pool or Dask); finished runs are kept
+in the one store (:mod:`rockbench.sweep.store`) under ``<store>/<code fingerprint>/tradeoff/``,
+keyed by the scene's data, the case, the engine and its settings, and the repeat count.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from .errors import ParameterError
+
+__all__ = ["DEFAULT_DTS", "ValidationCase", "validation_set", "overturn_threshold", "Setting",
+           "settings_grid", "tradeoff", "Tradeoff", "summarize", "classify_error",
+           "RUN_COLUMNS", "TABLE_COLUMNS", "VERDICTS", "case_error"]
+
+#: Default time steps [s] of the work-precision sweep.
+DEFAULT_DTS: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
+
+#: Classes of agreement with the analytic model, best first (``verdict`` columns of the
+#: tradeoff, advise and stress tables). "outside model" is used by :mod:`rockbench.stress` only.
+VERDICTS = ("within 1%", "within 5%", "off", "diverged", "invalid", "outside model")
+
+#: The clock of the cost: process CPU time (user + system) [s]. A module attribute so that a
+#: test can replace it.
+cpu_clock = time.process_time
+
+#: Self-consistency partner: each setting is compared with the same engine at dt / this.
+REFINEMENT = 4
+
+# Validation-set design (the analytic model chooses the pulses; see validation_set)
+_W_VALUES = (3.0, 4.0)
+_PULSES = (("symmetric", 1), ("symmetric", -1), ("antisymmetric", 1), ("antisymmetric", -1))
+_SURVIVE_FACTORS = (0.6, 0.95)       # x the analytic overturning threshold
+_OVERTURN_FACTOR = 1.25
+_FREE_PHI0 = (0.3, 0.7)              # x alpha, both directions
+_SURVIVE_END = 2.5                   # s after the pulse centre
+_OVERTURN_END = 8.0                  # s after the pulse centre
+_FALL = 4.0                          # x alpha: fall angle of the overturning cases
+_A_MAX = 30.0                        # no overturning below this A: the pulse is left out
+
+
+# =========================================================================================
+# The validation set
+# =========================================================================================
+@dataclass(frozen=True)
+class ValidationCase:
+    """One run of the validation set (plain data: picklable, hashable, JSON-able).
+
+    kind : "free" (free rocking from ``phi0``), "survive" (a Ricker pulse the analytic frame
+        survives) or "overturn" (one that overturns it);
+    name : short label, e.g. ``"free+0.3"``, ``"symm+ A=2.1 W=3"``;
+    motion : a motion spec (:func:`rockbench.scene.motion.motion_from_spec`) or None;
+    phi0 : initial rotation [rad]; duration : simulated time [s];
+    fall : fall angle [rad] of the run (None: the scene's own);
+    peak_ref : analytic max |phi| / alpha [-] (for the record).
+    """
+
+    kind: str
+    name: str
+    motion: tuple | None
+    phi0: float
+    duration: float
+    fall: float | None = None
+    peak_ref: float = math.nan
+
+    def motion_spec(self) -> dict[str, Any] | None:
+        return None if self.motion is None else dict(self.motion)
+
+    def load(self, scene):
+        """(scene with this case's fall angle, GroundMotion or None)."""
+        from .scene.motion import motion_from_spec
+
+        sc = scene if self.fall is None else scene.replace(fall_angle=self.fall)
+        return sc, motion_from_spec(self.motion_spec(), sc.structure)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "name": self.name, "motion": self.motion_spec(),
+                "phi0": self.phi0, "duration": self.duration, "fall": self.fall,
+                "peak_ref": None if not math.isfinite(self.peak_ref) else self.peak_ref}
+
+
+def _scene_key(scene) -> str:
+    return json.dumps(scene.to_dict(), sort_keys=True, default=str)
+
+
+@functools.lru_cache(maxsize=64)
+def _scene_from_key(text: str):
+    from .scene.scene import Scene
+
+    return Scene.from_dict(json.loads(text))
+
+
+def _pulse(scene, A: float, W: float, shape: str, sign: int):
+    from .scene.motion import RickerPulse
+
+    return RickerPulse.dimensionless(A, W, scene.structure, shape, sign)
+
+
+def _analytic(scene, motion, duration: float, phi0: float = 0.0):
+    from .runner import run
+
+    return run(scene, motion, engine="analytic", duration=duration, phi0=phi0)
+
+
+def _fall(scene) -> float:
+    return min(_FALL * scene.alpha, min(scene.fall_angles.values()))
+
+
+@functools.lru_cache(maxsize=256)
+def _threshold(key: str, W: float, shape: str, sign: int, rtol: float) -> float:
+    scene = _scene_from_key(key)
+    sc = scene.replace(fall_angle=_fall(scene))
+
+    def overturns(A: float) -> bool:
+        p = _pulse(sc, A, W, shape, sign)
+        return bool(_analytic(sc, p, _OVERTURN_END - p.t_start).summary.overturned)
+
+    lo, hi = 1.0, 1.5
+    while not overturns(hi):
+        lo, hi = hi, hi * 1.5
+        if hi > _A_MAX:
+            return math.inf
+    while hi - lo > rtol * hi:
+        mid = 0.5 * (lo + hi)
+        if overturns(mid):
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+def overturn_threshold(scene, W: float, shape: str = "symmetric", sign: int = 1, *,
+                       rtol: float = 1e-3) -> float:
+    """The smallest A = a_g / (g tan alpha) [-] of a Ricker pulse (``W`` = omega_g / p,
+    ``shape``, ``sign``) that overturns ``scene`` in the analytic model (fall angle
+    min(4 alpha, the scene's)), found by scanning A up from 1 by factors of 1.5 and bisecting
+    the first bracket to a relative width ``rtol`` (inf when nothing up to A = 30 overturns
+    it: such a pulse is left out of the validation set). Cached in memory per scene data."""
+    return _threshold(_scene_key(scene), float(W), str(shape), int(sign), float(rtol))
+
+
+def _free_duration(scene, phi0: float) -> float:
+    """End of a free-rocking run [s]: between the peak after the third impact and the fourth
+    impact of the analytic run, so that every impact is bracketed by complete excursions."""
+    r = _analytic(scene, None, 20.0, phi0)
+    t = r.impacts()["t"].to_numpy(dtype=float)
+    if t.size >= 4:
+        return float(t[2] + 0.75 * (t[3] - t[2]))
+    if t.size >= 2:
+        return float(t[-1] + 0.75 * (t[-1] - t[-2]))
+    return 10.0
+
+
+@functools.lru_cache(maxsize=16)
+def _validation_set(key: str, quick: bool) -> tuple[ValidationCase, ...]:
+    scene = _scene_from_key(key)
+    alpha = scene.alpha
+    cases: list[ValidationCase] = []
+    free = _FREE_PHI0[1:] if quick else _FREE_PHI0
+    for f in free:
+        for s in ((1,) if quick else (1, -1)):
+            phi0 = s * f * alpha
+            cases.append(ValidationCase("free", f"free{'+' if s > 0 else '-'}{f:g}", None, phi0,
+                                        round(_free_duration(scene, phi0), 3), None, f))
+    combos = [(W, shape, sign) for W in _W_VALUES for shape, sign in _PULSES]
+    if quick:
+        combos = [(3.0, "symmetric", 1), (4.0, "antisymmetric", -1)]
+    fall = _fall(scene)
+    sc_fall = scene.replace(fall_angle=fall)
+    for W, shape, sign in combos:
+        A_ov = overturn_threshold(scene, W, shape, sign, rtol=1e-2 if quick else 1e-3)
+        if not math.isfinite(A_ov):
+            continue
+        factors = _SURVIVE_FACTORS if (W == _W_VALUES[0] or quick) else _SURVIVE_FACTORS[:1]
+        for f in factors:
+            A = round(f * A_ov, 4)
+            p = _pulse(scene, A, W, shape, sign)
+            dur = round(_SURVIVE_END - p.t_start, 4)
+            r = _analytic(scene, p, dur)
+            if r.summary.overturned or not r.summary.uplifted:
+                continue
+            spec = (("A", A), ("W", W), ("kind", "ricker"), ("shape", shape), ("sign", sign))
+            cases.append(ValidationCase("survive", p.label() if hasattr(p, "label") else
+                                        f"{shape} {sign} A={A} W={W}", spec, 0.0, dur, None,
+                                        float(r.summary.max_abs_phi_over_alpha)))
+    over = [(3.0, "symmetric", 1), (4.0, "antisymmetric", -1)]
+    for W, shape, sign in (over[:1] if quick else over):
+        A_ov = overturn_threshold(scene, W, shape, sign, rtol=1e-2 if quick else 1e-3)
+        if not math.isfinite(A_ov):
+            continue
+        A = round(_OVERTURN_FACTOR * A_ov, 4)
+        p = _pulse(sc_fall, A, W, shape, sign)
+        dur = round(_OVERTURN_END - p.t_start, 4)
+        r = _analytic(sc_fall, p, dur)
+        if not r.summary.overturned:
+            continue
+        spec = (("A", A), ("W", W), ("kind", "ricker"), ("shape", shape), ("sign", sign))
+        cases.append(ValidationCase("overturn", p.label(), spec, 0.0, dur, fall,
+                                    float(r.summary.max_abs_phi_over_alpha)))
+    return tuple(cases)
+
+
+def validation_set(scene, *, quick: bool = False) -> list[ValidationCase]:
+    """The validation set of ``scene``, chosen with the analytic model (cached in memory per
+    scene data):
+
+    * free rocking from phi0 = +-0.3 alpha and +-0.7 alpha (4 runs), each ending between the
+      peak after the third impact and the fourth impact;
+    * 12 Ricker pulses the analytic structure survives: the four pulses (symmetric and
+      antisymmetric, both signs) at W = 3 and W = 4, at A = 0.6 x the analytic overturning
+      threshold of that pulse (:func:`overturn_threshold`), and the four at W = 3 also at
+      0.95 x the threshold (near the overturning boundary, where the response is steep), each
+      from -3 T_g to 2.5 s after the pulse centre (pulses that do not uplift or that overturn
+      are dropped);
+    * 2 overturning pulses at 1.25 x the threshold (symmetric +1 at W = 3, antisymmetric -1 at
+      W = 4), to 8 s after the centre, with the fall angle min(4 alpha, the scene's).
+
+    ``quick``: 1 free run (+0.7 alpha), 4 surviving pulses (2 pulses x 2 factors) and 1
+    overturning pulse: for tests and ``rockbench advise --quick``.
+    """
+    return list(_validation_set(_scene_key(scene), bool(quick)))
+
+
+# =========================================================================================
+# Settings
+# =========================================================================================
+@dataclass(frozen=True)
+class Setting:
+    """One engine setting: ``engine`` and a tuple of (name, value) setting overrides."""
+
+    engine: str
+    overrides: tuple[tuple[str, Any], ...]
+
+    @property
+    def dt(self) -> float:
+        from .engines import get_backend
+
+        d = dict(self.overrides)
+        return float(d["dt"]) if "dt" in d else float(get_backend(self.engine).Settings().dt)
+
+    @property
+    def label(self) -> str:
+        """``"dt=0.001"`` or ``"dt=0.001,iterations=50"`` (dt first, then sorted names)."""
+        d = dict(self.overrides)
+        parts = [f"dt={self.dt:g}"] + [f"{k}={d[k]:g}" if isinstance(d[k], float)
+                                       else f"{k}={d[k]}" for k in sorted(d) if k != "dt"]
+        return ",".join(parts)
+
+    def refined(self, factor: int = REFINEMENT) -> "Setting":
+        """The same setting at dt / factor."""
+        d = dict(self.overrides)
+        d["dt"] = self.dt / factor
+        return Setting(self.engine, tuple(sorted(d.items())))
+
+
+def _parse_value(text: str) -> Any:
+    t = text.strip()
+    for conv in (int, float):
+        try:
+            return conv(t)
+        except ValueError:
+            pass
+    if t.lower() in ("true", "false"):
+        return t.lower() == "true"
+    return t
+
+
+def parse_setting(text: str) -> dict[str, Any]:
+    """``"iterations=50"`` or ``"pymunk:iterations=50,collision_slop=1e-4"`` -> overrides
+    (an optional ``engine:`` prefix is returned under the key ``"__engine__"``)."""
+    out: dict[str, Any] = {}
+    if ":" in text.split("=", 1)[0]:
+        eng, text = text.split(":", 1)
+        out["__engine__"] = eng.strip()
+    for part in text.split(","):
+        if not part.strip():
+            continue
+        if "=" not in part:
+            raise ParameterError("setting", part, "name=value (e.g. iterations=50)")
+        k, v = part.split("=", 1)
+        out[k.strip()] = _parse_value(v)
+    return out
+
+
+def settings_grid(engines: Sequence[str], dts: Iterable[float] | None = None,
+                  extra: Sequence[Mapping[str, Any] | str] | None = None) -> list[Setting]:
+    """Every (engine, setting) of a sweep: each engine at each ``dt`` [s] (default
+    :data:`DEFAULT_DTS`), and each ``extra`` override set (a dict or ``"name=value,..."``,
+    optionally ``"engine:name=value"`` for one engine only) at each dt, unless it sets dt
+    itself. Settings are validated by the engines when they run."""
+    dts = [float(d) for d in (DEFAULT_DTS if dts is None else dts)]
+    for d in dts:
+        if not (d > 0 and math.isfinite(d)):
+            raise ParameterError("dt", d, "> 0 [s]")
+    extras: list[dict[str, Any]] = [{}]
+    for e in extra or []:
+        extras.append(parse_setting(e) if isinstance(e, str) else dict(e))
+    out: list[Setting] = []
+    for eng in engines:
+        for ex in extras:
+            ex = dict(ex)
+            only = ex.pop("__engine__", None)
+            if only is not None and only != eng:
+                continue
+            for d in ([ex["dt"]] if "dt" in ex else dts):
+                o = dict(ex)
+                o["dt"] = float(d)
+                s = Setting(eng, tuple(sorted(o.items())))
+                if s not in out:
+                    out.append(s)
+    return out
+
+
+# =========================================================================================
+# One run (what the executor runs; picklable, top level)
+# =========================================================================================
+@functools.lru_cache(maxsize=64)
+def _reference(key: str, case: ValidationCase):
+    scene = _scene_from_key(key)
+    sc, motion = case.load(scene)
+    return _analytic(sc, motion, case.duration, case.phi0)
+
+
+def _warm(engine: str) -> None:
+    """Import the engine before timing (an import is not the run's cost)."""
+    from .engines import get_backend
+
+    get_backend(engine).available()
+
+
+def _run_overrides(setting: Setting) -> dict[str, Any]:
+    """The setting's overrides, with ``output_dt`` raised to dt when dt exceeds the engine's
+    default output interval (1 ms): histories stay sampled at 1 ms or at every step."""
+    from .engines import get_backend
+
+    over = dict(setting.overrides)
+    if "output_dt" not in over:
+        od = float(get_backend(setting.engine).Settings().output_dt)
+        if setting.dt > od:
+            over["output_dt"] = setting.dt
+    return over
+
+
+def _run_item(item: dict[str, Any]) -> dict[str, Any]:
+    """Run one (engine, setting, case) ``repeat`` times; return its row (metrics against the
+    analytic reference, CPU times) and the thinned history (t, phi) for self-consistency.
+    Never raises for a failure of the run: it becomes status "error"."""
+    from .compare import metrics
+    from .runner import run
+
+    case: ValidationCase = item["case"]
+    setting: Setting = item["setting"]
+    row: dict[str, Any] = {"engine": setting.engine, "setting": setting.label,
+                           "dt": setting.dt, "case": case.name, "kind": case.kind}
+    try:
+        scene = _scene_from_key(item["scene"])
+        sc, motion = case.load(scene)
+        ref = _reference(item["scene"], case)
+        _warm(setting.engine)
+        cpu: list[float] = []
+        result = None
+        over = _run_overrides(setting)
+        for _ in range(int(item["repeat"])):
+            c0 = cpu_clock()
+            result = run(sc, motion, engine=setting.engine, duration=case.duration,
+                         phi0=case.phi0, **over)
+            cpu.append(cpu_clock() - c0)
+        m = metrics(result, ref)
+        row.update({k: m[k] for k in ("status", "reason", "peak_rel_error", "nrmse",
+                                      "eta_max_rel_error", "verdict_agrees", "overturned",
+                                      "overturned_ref", "energy_gained_at_impact",
+                                      "max_sliding", "max_penetration", "contact_opened")})
+        row["sim_time"] = float(result.cost.sim_time)
+        row["cpu_s"] = [float(c) for c in cpu]
+        row["t"] = result.history["t"].to_numpy(dtype=float)
+        row["phi"] = result.history["phi"].to_numpy(dtype=float)
+        row["alpha"] = float(sc.alpha)
+    except Exception as e:  # a failing run is data
+        row.update(status="error", reason=f"{type(e).__name__}: {e}", cpu_s=[],
+                   sim_time=math.nan)
+    return row
+
+
+def _crashed(item: dict[str, Any], reason: str) -> dict[str, Any]:
+    s, c = item["setting"], item["case"]
+    return {"engine": s.engine, "setting": s.label, "dt": s.dt, "case": c.name,
+            "kind": c.kind, "status": "error", "reason": reason, "cpu_s": [],
+            "sim_time": math.nan}
+
+
+# =========================================================================================
+# Errors and classes
+# =========================================================================================
+def case_error(row: Mapping[str, Any]) -> float:
+    """The validation error [-] of one run row (see the module docstring): |peak error| of a
+    surviving pulse, the largest eta error of a free-rocking run, 0 for an overturning pulse;
+    infinite when the run is not ok or gets the overturning verdict wrong."""
+    if row.get("status") != "ok":
+        return math.inf
+    va = row.get("verdict_agrees")
+    if va is not None and va is not pd.NA and not bool(va):
+        return math.inf
+    kind = row.get("kind")
+    if kind == "survive":
+        v = abs(float(row.get("peak_rel_error", math.nan)))
+    elif kind == "free":
+        v = abs(float(row.get("eta_max_rel_error", math.nan)))
+    else:
+        return 0.0
+    return v if math.isfinite(v) else math.inf
+
+
+def classify_error(err: float, status: str = "ok") -> str:
+    """The :data:`VERDICTS` class of a relative error ``err`` [-] of a run with ``status``:
+    "within 1%", "within 5%", "off" (> 5 % or a wrong overturning verdict: infinite),
+    "diverged" or "invalid" (status)."""
+    if status in ("diverged", "invalid"):
+        return status
+    if status != "ok":
+        return "invalid"
+    if err <= 0.01:
+        return "within 1%"
+    if err <= 0.05:
+        return "within 5%"
+    return "off"
+
+
+# =========================================================================================
+# Tables
+# =========================================================================================
+#: Columns of :attr:`Tradeoff.runs` (one row per engine, setting and case).
+RUN_COLUMNS: dict[str, str] = {
+    "engine": "-, backend name",
+    "setting": "-, setting label (dt first, then other overrides)",
+    "dt": "s, engine time step",
+    "case": "-, validation case (free rocking +-phi0/alpha, or the pulse's label)",
+    "kind": "-, free | survive | overturn",
+    "status": "-, ok | diverged | invalid | error (error: an exception, see reason)",
+    "reason": "-, why a run is not ok",
+    "peak_rel_error": "-, max|phi| / max|phi_ref| - 1 against the analytic reference",
+    "nrmse": "-, RMS of (phi - phi_ref) / alpha over the common time grid",
+    "eta_max_rel_error": "-, largest |eta / eta_ref - 1| over the run's impacts",
+    "verdict_agrees": "-, same overturning verdict as the analytic reference",
+    "error": "-, the case's validation error (case_error): inf when not ok or wrong verdict",
+    "verdict": "-, class of the error (VERDICTS)",
+    "self_peak_error": "-, max|phi| / max|phi_fine| - 1 against the same engine at dt / 4 "
+                       "(NaN when that run is not in the sweep)",
+    "self_nrmse": "-, RMS of (phi - phi_fine) / alpha against the same engine at dt / 4",
+    "max_sliding": "m, largest slip of a contact point",
+    "contact_opened": "-, a contact the analytic model keeps closed opened",
+    "sim_time": "s, simulated time of the run",
+    "cpu_s_median": "s, median over the repeats of the run's process CPU time",
+    "cpu_s_min": "s, smallest CPU time of the repeats",
+    "cpu_s_max": "s, largest CPU time of the repeats",
+}
+
+#: Columns of :attr:`Tradeoff.table` (one row per engine and setting).
+TABLE_COLUMNS: dict[str, str] = {
+    "engine": "-, backend name",
+    "setting": "-, setting label",
+    "dt": "s, engine time step",
+    "n_cases": "-, validation runs",
+    "n_ok": "-, runs with status ok",
+    "peak_error_worst": "-, largest |peak_rel_error| over the surviving pulses",
+    "peak_error_median": "-, median |peak_rel_error| over the surviving pulses",
+    "nrmse_worst": "-, largest nrmse over the free-rocking and surviving runs",
+    "nrmse_median": "-, median nrmse over the free-rocking and surviving runs",
+    "eta_error_worst": "-, largest eta error over the free-rocking runs",
+    "eta_error_median": "-, median of the free-rocking runs' largest eta errors",
+    "verdicts_agree": "-, fraction of ok runs with the analytic overturning verdict",
+    "worst_error": "-, the worst validation error (inf: a run not ok or a wrong verdict)",
+    "verdict": "-, class of worst_error (VERDICTS)",
+    "self_peak_error_worst": "-, largest |self_peak_error| (against dt / 4; NaN: not run)",
+    "self_nrmse_worst": "-, largest self_nrmse (against dt / 4)",
+    "max_sliding": "m, largest slip over the ok runs",
+    "any_contact_opened": "-, a contact the analytic model keeps closed opened in some run",
+    "cpu_per_sim_s": "s/s, process CPU s per simulated s over the whole set (median of repeats)",
+    "cpu_per_sim_s_min": "s/s, the same for the fastest repeat",
+    "cpu_per_sim_s_max": "s/s, the same for the slowest repeat",
+    "real_time_factor": "-, simulated s per CPU s (1 / cpu_per_sim_s)",
+    "repeats": "-, runs of every case (cost spread over them)",
+}
+
+
+def _self_consistency(runs: list[dict[str, Any]]) -> None:
+    """Add self_peak_error and self_nrmse to every run whose dt / 4 partner is among ``runs``."""
+    by = {(r["engine"], r["setting"], r["case"]): r for r in runs}
+    for r in runs:
+        r["self_peak_error"] = r["self_nrmse"] = math.nan
+        s = r.get("_setting")
+        if s is None or r.get("status") != "ok":
+            continue
+        fine = by.get((r["engine"], s.refined().label, r["case"]))
+        if fine is None or fine.get("status") != "ok":
+            continue
+        t, phi, tf, pf = r["t"], r["phi"], fine["t"], fine["phi"]
+        lo, hi = max(t[0], tf[0]), min(t[-1], tf[-1])
+        m = (tf >= lo - 1e-9) & (tf <= hi + 1e-9)
+        if not m.any():
+            continue
+        e = (np.interp(tf[m], t, phi) - pf[m]) / r["alpha"]
+        r["self_nrmse"] = float(np.sqrt(np.mean(e * e)))
+        pk = float(np.max(np.abs(pf)))
+        r["self_peak_error"] = float(np.max(np.abs(phi)) / pk - 1.0) if pk > 0 else math.nan
+
+
+def _runs_frame(runs: list[dict[str, Any]]) -> pd.DataFrame:
+    rows = []
+    for r in runs:
+        cpu = np.asarray(r.get("cpu_s") or [], dtype=float)
+        row = {c: r.get(c, math.nan) for c in RUN_COLUMNS}
+        row["error"] = case_error(r)
+        row["verdict"] = classify_error(row["error"], r.get("status", "error"))
+        row["cpu_s_median"] = float(np.median(cpu)) if cpu.size else math.nan
+        row["cpu_s_min"] = float(cpu.min()) if cpu.size else math.nan
+        row["cpu_s_max"] = float(cpu.max()) if cpu.size else math.nan
+        row["_cpu"] = cpu
+        rows.append(row)
+    df = pd.DataFrame(rows, columns=list(RUN_COLUMNS) + ["_cpu"])
+    for c in ("reason",):
+        df[c] = df[c].fillna("").astype(str)
+    return df
+
+
+def summarize(runs: pd.DataFrame) -> pd.DataFrame:
+    """One row per (engine, setting) of a runs frame (:data:`RUN_COLUMNS`), columns
+    :data:`TABLE_COLUMNS`. Cost: total CPU over total simulated time of the set, per repeat
+    (``_cpu`` lists of the runs; without them the runs' median CPU seconds)."""
+    out = []
+    for (eng, label), g in runs.groupby(["engine", "setting"], sort=False):
+        ok = g[g["status"] == "ok"]
+        surv = ok[ok["kind"] == "survive"]
+        free = ok[ok["kind"] == "free"]
+        fr = ok[ok["kind"].isin(["free", "survive"])]
+
+        def stat(s: pd.Series, f) -> float:
+            v = np.abs(pd.to_numeric(s, errors="coerce").to_numpy(dtype=float))
+            v = v[np.isfinite(v)]
+            return float(f(v)) if v.size else math.nan
+
+        errs = g["error"].to_numpy(dtype=float)
+        worst = float(errs.max()) if errs.size else math.inf
+        status = "ok" if (g["status"] == "ok").all() else (
+            "diverged" if (g["status"] == "diverged").any() else
+            "invalid" if (g["status"] == "invalid").any() else "error")
+        sim = g["sim_time"].to_numpy(dtype=float)
+        cpus = [c for c in g.get("_cpu", pd.Series([None] * len(g)))]
+        per_rep = []
+        if cpus and all(isinstance(c, np.ndarray) and c.size for c in cpus):
+            n = min(c.size for c in cpus)
+            tot_sim = float(np.nansum(sim))
+            per_rep = [float(sum(c[k] for c in cpus)) / tot_sim for k in range(n)]
+        elif "cpu_s_median" in g and np.isfinite(sim).all():
+            per_rep = [float(g["cpu_s_median"].sum() / sim.sum())]
+        va = ok["verdict_agrees"].dropna().astype(bool)
+        opened = g["contact_opened"].dropna()
+        row = {
+            "engine": eng, "setting": label, "dt": float(g["dt"].iloc[0]),
+            "n_cases": int(len(g)), "n_ok": int(len(ok)),
+            "peak_error_worst": stat(surv["peak_rel_error"], np.max),
+            "peak_error_median": stat(surv["peak_rel_error"], np.median),
+            "nrmse_worst": stat(fr["nrmse"], np.max),
+            "nrmse_median": stat(fr["nrmse"], np.median),
+            "eta_error_worst": stat(free["eta_max_rel_error"], np.max),
+            "eta_error_median": stat(free["eta_max_rel_error"], np.median),
+            "verdicts_agree": float(va.mean()) if len(va) else math.nan,
+            "worst_error": worst,
+            "verdict": classify_error(worst, status if status != "error" else "invalid"),
+            "self_peak_error_worst": stat(ok.loc[ok["kind"] == "survive", "self_peak_error"],
+                                          np.max),
+            "self_nrmse_worst": stat(fr["self_nrmse"], np.max),
+            "max_sliding": stat(ok["max_sliding"], np.max),
+            "any_contact_opened": bool(opened.astype(bool).any()) if len(opened) else False,
+            "cpu_per_sim_s": float(np.median(per_rep)) if per_rep else math.nan,
+            "cpu_per_sim_s_min": float(np.min(per_rep)) if per_rep else math.nan,
+            "cpu_per_sim_s_max": float(np.max(per_rep)) if per_rep else math.nan,
+            "repeats": len(per_rep),
+        }
+        c = row["cpu_per_sim_s"]
+        row["real_time_factor"] = 1.0 / c if c and math.isfinite(c) and c > 0 else math.nan
+        out.append(row)
+    df = pd.DataFrame(out, columns=list(TABLE_COLUMNS))
+    return df.sort_values(["engine", "dt"], ascending=[True, False]).reset_index(drop=True)
+
+
+@dataclass
+class Tradeoff:
+    """The work-precision measurements of one scene.
+
+    scene : str (scene name); cases : the validation set; runs : one row per engine, setting
+    and case (:data:`RUN_COLUMNS`); table : one row per engine and setting
+    (:data:`TABLE_COLUMNS`); unavailable : engine -> why it could not run here;
+    machine : where the cost was measured (processor, Python, engine versions).
+    """
+
+    scene: str
+    cases: list[ValidationCase]
+    runs: pd.DataFrame
+    table: pd.DataFrame
+    unavailable: dict[str, str] = field(default_factory=dict)
+    machine: dict[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        from .result import _jsonable
+
+        return _jsonable({"scene": self.scene, "machine": self.machine,
+                          "unavailable": self.unavailable,
+                          "cases": [c.to_dict() for c in self.cases],
+                          "table": self.table.to_dict("records"),
+                          "columns": TABLE_COLUMNS})
+
+    def to_csv(self, directory) -> list[Path]:
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        a, b = d / "tradeoff.csv", d / "tradeoff_runs.csv"
+        self.table.to_csv(a, index=False)
+        self.runs.drop(columns=["_cpu"], errors="ignore").to_csv(b, index=False)
+        return [a, b]
+
+
+def machine_info() -> dict[str, Any]:
+    """Where the cost was measured: processor, cores, Python, engine versions."""
+    import os
+    import platform
+
+    from .engines import engine_info
+
+    proc = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    proc = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {"processor": proc, "cores": os.cpu_count(), "python": platform.python_version(),
+            "engines": {r["name"]: r.get("version", r.get("reason")) for r in engine_info()}}
+
+
+# =========================================================================================
+# The store
+# =========================================================================================
+def _item_key(item: dict[str, Any]) -> str:
+    from .sweep.store import code_fingerprint, key
+
+    s, c = item["setting"], item["case"]
+    return key({"scene": item["scene"], "case": c.to_dict(), "engine": s.engine,
+                "settings": dict(s.overrides), "repeat": int(item["repeat"]),
+                "code": code_fingerprint()})
+
+
+def _store_dir(store) -> Path:
+    from .sweep.store import code_fingerprint, store_dir
+
+    return store_dir(store) / code_fingerprint() / "tradeoff"
+
+
+def _load_stored(directory: Path, k: str) -> dict[str, Any] | None:
+    from .sweep.store import load_payload
+
+    return load_payload(directory, k)
+
+
+# =========================================================================================
+# The sweep
+# =========================================================================================
+def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float] | None = None,
+             settings: Sequence[Mapping[str, Any] | str] | None = None, repeat: int = 3,
+             quick: bool = False, self_consistency: str = "grid",
+             executor: str = "process", workers: int | None = None, store=None,
+             progress: bool = False, cases: Sequence[ValidationCase] | None = None
+             ) -> Tradeoff:
+    """Measure work-precision on ``scene`` (a Scene, a built-in name or a scene file).
+
+    Parameters
+    ----------
+    engines : backend names (default: every available engine, the analytic model excluded).
+    dts : time steps [s] (default :data:`DEFAULT_DTS`).
+    settings : extra override sets (:func:`settings_grid`), e.g. ``["iterations=50"]``.
+    repeat : runs of each case (>= 1); the cost is the median over them, with min-max spread.
+    quick : the reduced validation set (:func:`validation_set`).
+    self_consistency : ``"grid"`` (compare with dt / 4 where that dt is in the sweep),
+        ``"run"`` (run the missing dt / 4 settings too, once, not shown as settings) or
+        ``"none"``.
+    executor, workers : :func:`rockbench.sweep.executors.execute` (``"process"`` by default:
+        each worker is one process on one core; CPU time is per process, so parallel runs do
+        not inflate each other's cost as long as no core is oversubscribed).
+    store : a directory: runs already there (same scene data, case, engine, settings, repeat
+        count and code fingerprint) are not run again; new ones are written there.
+    cases : a validation set to use instead of :func:`validation_set`.
+    """
+    from .runner import REFERENCE, resolve_engines
+    from .scene.scene import Scene, load_scene
+    from .sweep.executors import execute
+
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+        raise ParameterError("repeat", repeat, "an integer >= 1")
+    if self_consistency not in ("grid", "run", "none"):
+        raise ParameterError("self_consistency", self_consistency, "grid, run or none")
+    names = [n for n in resolve_engines(engines) if n != REFERENCE]
+    from .engines import get_backend
+
+    unavailable: dict[str, str] = {}
+    usable = []
+    for n in names:
+        ok, why = get_backend(n).available()
+        if ok:
+            usable.append(n)
+        else:
+            unavailable[n] = why
+    grid = settings_grid(usable, dts, settings)
+    shown = set(grid)
+    if self_consistency == "run":
+        for s in list(grid):
+            f = s.refined()
+            if f not in shown and f.dt >= 1e-6:
+                grid.append(f)
+    vset = list(cases) if cases is not None else validation_set(scene, quick=quick)
+    key = _scene_key(scene)
+    items = []
+    for s in grid:
+        for c in vset:
+            # refinement-only runs need no repeats: their cost is not reported
+            items.append({"scene": key, "case": c, "setting": s,
+                          "repeat": repeat if s in shown else 1})
+    keyed = [(_item_key(it), it) for it in items]
+    done: dict[str, dict[str, Any]] = {}
+    directory = None
+    if store is not None:
+        directory = _store_dir(store)
+        for k, _ in keyed:
+            row = _load_stored(directory, k)
+            if row is not None and row.get("status") != "error":
+                done[k] = row
+    todo = [(k, it) for k, it in keyed if k not in done]
+
+    def on_result(k: str, row: dict[str, Any]) -> None:
+        done[k] = row
+        if directory is not None and row.get("status") != "error":
+            from .sweep.store import write_payload
+            write_payload(directory, k, row)
+
+    # TODO(pymunk/mujoco threads): every engine here steps on one thread.
+    execute(_run_item, todo, on_result=on_result, crashed=_crashed,
+            label=lambda it: f"{it['setting'].engine} {it['setting'].label} {it['case'].name}",
+            is_error=lambda r: r.get("status") not in ("ok",), executor=executor,
+            workers=workers, progress=progress, desc="tradeoff", unit="run")
+    runs = []
+    for k, it in keyed:
+        r = dict(done[k])
+        r["_setting"] = it["setting"]
+        r["_shown"] = it["setting"] in shown
+        runs.append(r)
+    _self_consistency(runs)
+    frame = _runs_frame([r for r in runs if r["_shown"]])
+    table = summarize(frame)
+    return Tradeoff(scene=scene.name, cases=vset, runs=frame, table=table,
+                    unavailable=unavailable, machine=machine_info())

@@ -1,0 +1,310 @@
+"""The compiled analytic path (:mod:`rockbench.analytic.compiled`) against the plain ``solve_ivp``
+reference (:func:`rockbench.analytic.solver.simulate`), as MuJoCo's ``rollout_test.py`` tests its
+fast rollout against the plain one: same inputs, same verdicts, max |phi| / alpha within 1e-4
+(measured: ~1e-13 on pulses), histories within 1e-6 alpha on the output grid.
+
+Maps: a 10 x 10 x 4 map of ``paper-asymmetric`` and ``paper-asymmetric-hybrid-eps1`` in the
+default suite; the issue's 40 x 40 x 4 map of three scenes is marked slow. A cell whose verdict
+differs is accepted only if it lies within 0.5 % of a verdict boundary along the amplitude axis:
+the reference's own verdict changes between A (1 - 0.005) and A (1 + 0.005).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rockbench.analytic import compiled, rules
+from rockbench.analytic.compiled import NUMBA_AVAILABLE, run_pulse_grid, simulate_compiled
+from rockbench.analytic.solver import AnalyticSettings, simulate
+from rockbench.errors import BackendUnavailable
+from rockbench.result import CONTACT_COLUMNS, EVENT_COLUMNS, HISTORY_COLUMNS
+from rockbench.scene.motion import RickerPulse
+from rockbench.scene.scene import load_scene
+
+pytestmark = pytest.mark.skipif(not NUMBA_AVAILABLE, reason=f"{compiled.NUMBA_ERROR}")
+
+ASYM = load_scene("paper-asymmetric")
+SYM = load_scene("paper-symmetric")
+EPS1 = load_scene("paper-asymmetric-hybrid-eps1")
+BLOCK = load_scene("housner-block")
+EL_CENTRO = Path("/work/shared/records/IV1940_ElCentro_180.AT2")
+
+VERDICTS = ("overturned", "exceeded_critical", "fractured")
+PHI_TOL = 1e-6        # history: |phi_compiled - phi_reference| / alpha on the output grid
+PEAK_TOL = 1e-4       # max |phi| / alpha (the issue's tolerance)
+MINIMAL = AnalyticSettings(history="minimal")
+
+
+# --- helpers -----------------------------------------------------------------------------------
+def _cells(n_a: int, n_w: int, a_range=(1.5, 8.0), w_range=(1.0, 8.0)):
+    return [(shape, sign, float(A), float(W)) for shape in ("symmetric", "antisymmetric")
+            for sign in (1, -1) for A in np.linspace(*a_range, n_a)
+            for W in np.linspace(*w_range, n_w)]
+
+
+def _reference_cell(scene, shape, sign, A, W) -> dict:
+    s = simulate(scene, RickerPulse.dimensionless(A, W, scene.structure, shape, sign),
+                 settings=MINIMAL).summary
+    return {"overturned": s.overturned, "exceeded_critical": s.exceeded_critical,
+            "fractured": s.fractured, "max_abs_phi_over_alpha": s.max_abs_phi_over_alpha,
+            "n_impacts": s.n_impacts, "uplifted": s.uplifted, "status": s.status}
+
+
+def _verdicts(d: dict) -> tuple:
+    return tuple(bool(d[k]) for k in VERDICTS)
+
+
+def _near_boundary(scene, shape, sign, A, W, rel=0.005) -> bool:
+    """The reference's verdicts change within A (1 -+ rel): a verdict boundary is that close."""
+    lo = _verdicts(_reference_cell(scene, shape, sign, A * (1 - rel), W))
+    hi = _verdicts(_reference_cell(scene, shape, sign, A * (1 + rel), W))
+    mid = _verdicts(_reference_cell(scene, shape, sign, A, W))
+    return lo != mid or hi != mid
+
+
+def compare_map(scene, cells) -> dict:
+    """Run ``cells`` with both paths; return the disagreements (after excluding cells within
+    0.5 % of a verdict boundary) and the largest max |phi| / alpha difference elsewhere."""
+    fast = run_pulse_grid(scene, cells)
+    assert list(fast.columns) == list(compiled.MAP_COLUMNS)
+    assert len(fast) == len(cells)
+    bad, excluded, worst = [], [], 0.0
+    for i, cell in enumerate(cells):
+        ref = _reference_cell(scene, *cell)
+        row = fast.iloc[i]
+        assert (row["pulse"], row["sign"], row["amplitude"], row["frequency"]) == cell
+        same = (_verdicts(ref) == _verdicts(row) and ref["status"] == row["status"]
+                and bool(ref["uplifted"]) == bool(row["uplifted"]))
+        err = abs(ref["max_abs_phi_over_alpha"] - row["max_abs_phi_over_alpha"])
+        if same and err <= PEAK_TOL:
+            worst = max(worst, err)
+            continue
+        if _near_boundary(scene, *cell):
+            excluded.append(cell)
+        else:
+            bad.append((cell, ref, row.to_dict()))
+    return {"bad": bad, "excluded": excluded, "worst": worst, "fast": fast}
+
+
+# --- maps --------------------------------------------------------------------------------------
+@pytest.mark.parametrize("scene", [ASYM, EPS1], ids=lambda s: s.name)
+def test_map_10x10x4_agrees_with_reference(scene):
+    out = compare_map(scene, _cells(10, 10))
+    assert not out["bad"], out["bad"][:3]
+    assert out["worst"] <= PEAK_TOL
+    # the map is not trivial: both verdicts occur (and fracture on the fracturing frame)
+    fast = out["fast"]
+    assert fast["overturned"].any() and not fast["overturned"].all()
+    if scene is EPS1:
+        assert fast["fractured"].any()
+    assert (fast["status"] == "ok").all()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["paper-asymmetric", "paper-symmetric",
+                                  "paper-asymmetric-hybrid-eps1"])
+def test_map_40x40x4_verdicts_agree_with_reference(name):
+    scene = load_scene(name)
+    out = compare_map(scene, _cells(40, 40, a_range=(0.5, 8.0), w_range=(0.5, 10.0)))
+    fast = out["fast"]
+    print(f"\n{name}: {len(fast)} cells, {int(fast['overturned'].sum())} overturned, "
+          f"{int(fast['fractured'].sum())} fractured, {len(out['excluded'])} excluded near a "
+          f"boundary {out['excluded']}, {len(out['bad'])} disagreeing, "
+          f"max |d max|phi|/alpha| = {out['worst']:.3g}")
+    assert not out["bad"], out["bad"][:3]
+    assert out["worst"] <= PEAK_TOL
+
+
+def test_map_row_equals_single_run():
+    """A map cell and the drop-in run of the same pulse give the same summary."""
+    cell = ("antisymmetric", -1, 4.0, 3.0)
+    row = run_pulse_grid(ASYM, [cell]).iloc[0]
+    r = simulate_compiled(ASYM, RickerPulse.dimensionless(4.0, 3.0, ASYM.structure,
+                                                          "antisymmetric", -1), settings=MINIMAL)
+    s = r.summary
+    assert (row["overturned"], row["exceeded_critical"], row["fractured"], row["n_impacts"]) == \
+        (s.overturned, s.exceeded_critical, s.fractured, s.n_impacts)
+    assert row["max_abs_phi_over_alpha"] == pytest.approx(s.max_abs_phi_over_alpha, abs=1e-12)
+
+
+def test_map_input_validation():
+    with pytest.raises(ValueError, match="shape"):
+        run_pulse_grid(ASYM, [("square", 1, 2.0, 2.0)])
+    with pytest.raises(ValueError, match="sign"):
+        run_pulse_grid(ASYM, [("symmetric", 0, 2.0, 2.0)])
+    with pytest.raises(ValueError, match="A"):
+        run_pulse_grid(ASYM, [("symmetric", 1, -2.0, 2.0)])
+    assert len(run_pulse_grid(ASYM, [])) == 0
+
+
+def test_map_below_uplift_threshold_stays_at_rest():
+    """A < lambda / tan(alpha): no uplift, max |phi| = 0 (Eq. 20), both paths."""
+    fast = run_pulse_grid(ASYM, [("symmetric", 1, 0.3, 2.0), ("antisymmetric", -1, 0.3, 2.0)])
+    assert not fast["uplifted"].any()
+    assert (fast["max_abs_phi_over_alpha"] == 0.0).all()
+
+
+# --- single runs: histories --------------------------------------------------------------------
+def assert_same_run(fast, ref, scene, *, phi_tol=PHI_TOL, t_max=None):
+    """The drop-in contract: same schema, same events and verdicts, phi on the grid."""
+    hf, hr = fast.history, ref.history
+    assert list(hf.columns) == list(HISTORY_COLUMNS) + list(CONTACT_COLUMNS)
+    assert list(fast.events.columns) == list(EVENT_COLUMNS)
+    assert dict(hf.dtypes) == dict(hr.dtypes)
+    assert len(hf) == len(hr)
+    np.testing.assert_allclose(hf["t"].to_numpy(), hr["t"].to_numpy(), rtol=0, atol=1e-9)
+    m = slice(None) if t_max is None else (hr["t"].to_numpy() <= t_max)
+    dphi = np.abs(hf["phi"].to_numpy()[m] - hr["phi"].to_numpy()[m]) / scene.alpha
+    assert dphi.max() <= phi_tol
+    fs, rs = fast.summary, ref.summary
+    for k in ("overturned", "exceeded_critical", "fractured", "uplifted", "status"):
+        assert getattr(fs, k) == getattr(rs, k), k
+    assert fs.max_abs_phi_over_alpha == pytest.approx(rs.max_abs_phi_over_alpha, abs=phi_tol)
+    if t_max is None:
+        np.testing.assert_array_equal(hf["mode"].to_numpy(), hr["mode"].to_numpy())
+        np.testing.assert_array_equal(hf["devices_intact"].to_numpy(),
+                                      hr["devices_intact"].to_numpy())
+        assert fs.n_impacts == rs.n_impacts
+        assert list(fast.events["kind"]) == list(ref.events["kind"])
+        np.testing.assert_allclose(fast.events["t"], ref.events["t"], rtol=0, atol=1e-9)
+        assert fast.cost.sim_time == pytest.approx(ref.cost.sim_time, abs=1e-9)
+        for t_name in ("t_overturn", "t_fracture", "t_uplift"):
+            a, b = getattr(fs, t_name), getattr(rs, t_name)
+            assert (a is None) == (b is None), t_name
+            if a is not None:
+                assert a == pytest.approx(b, abs=1e-9), t_name
+
+
+@pytest.mark.parametrize("scene,shape,sign,A,W", [
+    (ASYM, "symmetric", 1, 4.0, 3.0),          # overturns after one impact
+    (ASYM, "antisymmetric", -1, 2.5, 2.0),     # rocks, impacts, survives
+    (SYM, "symmetric", -1, 3.0, 4.0),
+    (BLOCK, "antisymmetric", 1, 3.0, 3.0),
+], ids=["asym-overturn", "asym-rocks", "sym", "block"])
+def test_pulse_history_matches_reference(scene, shape, sign, A, W):
+    m = RickerPulse.dimensionless(A, W, scene.structure, shape, sign)
+    fast, ref = simulate_compiled(scene, m), simulate(scene, m)
+    assert fast.summary.uplifted
+    assert_same_run(fast, ref, scene)
+    # every column of the full history (device and beam columns from compiled kinematics)
+    for c in HISTORY_COLUMNS:
+        a, b = fast.history[c].to_numpy(), ref.history[c].to_numpy()
+        if a.dtype.kind == "f":
+            assert np.array_equal(np.isnan(a), np.isnan(b)), c
+            if np.isnan(b).all():
+                continue
+            scale = max(1.0, float(np.nanmax(np.abs(b))))
+            np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-9 * scale, err_msg=c)
+        else:
+            np.testing.assert_array_equal(a, b, err_msg=c)
+
+
+def test_fracture_history_matches_reference():
+    """eps_f = 1 %: tendons and dampers fracture, the frame survives (found on a 40 x 40 map)."""
+    m = RickerPulse.dimensionless(7.8, 1.72, EPS1.structure, "antisymmetric", 1)
+    fast, ref = simulate_compiled(EPS1, m), simulate(EPS1, m)
+    assert ref.summary.fractured and not ref.summary.overturned
+    assert_same_run(fast, ref, EPS1)
+    h = fast.history
+    # after the fracture every device force is zero
+    after = h["t"] > fast.summary.t_fracture
+    assert not h.loc[after, "devices_intact"].any()
+    assert (h.loc[after, ["tendon_force_left", "tendon_force_right", "damper_force_left",
+                          "damper_force_right"]] == 0.0).all().all()
+
+
+@pytest.mark.parametrize("scene", [ASYM, BLOCK, EPS1], ids=lambda s: s.name)
+def test_free_rocking_matches_reference(scene):
+    fast = simulate_compiled(scene, None, phi0=-0.5 * scene.alpha, duration=5.0)
+    ref = simulate(scene, None, phi0=-0.5 * scene.alpha, duration=5.0)
+    assert ref.summary.n_impacts >= 2
+    assert_same_run(fast, ref, scene)
+    # free rocking from rest at phi0: the peak is phi0 itself
+    assert fast.summary.max_abs_phi == pytest.approx(0.5 * scene.alpha, rel=1e-12)
+
+
+def test_minimal_history_schema():
+    m = RickerPulse.dimensionless(3.0, 3.0, EPS1.structure, "symmetric", 1)
+    fast, ref = simulate_compiled(EPS1, m, settings=MINIMAL), simulate(EPS1, m, settings=MINIMAL)
+    assert_same_run(fast, ref, EPS1)
+    for c in HISTORY_COLUMNS:
+        assert fast.history[c].isna().all() == ref.history[c].isna().all(), c
+
+
+@pytest.mark.skipif(not EL_CENTRO.exists(), reason=f"record {EL_CENTRO} not available")
+@pytest.mark.parametrize("scene", [ASYM, EPS1], ids=lambda s: s.name)
+def test_el_centro_matches_reference(scene):
+    """A recorded accelerogram. Late in the record the small-amplitude rocking with hundreds of
+    impacts is ill-conditioned: the reference itself moves by ~1e-3 alpha there when its rtol
+    changes by 1e-7 relative (measured), so phi is compared on the first 8 s (the strong part,
+    where the peak occurs) and the verdicts and max |phi| / alpha over the whole record."""
+    from rockbench.scene.records import load_record
+    rec = load_record(EL_CENTRO)
+    fast, ref = simulate_compiled(scene, rec), simulate(scene, rec)
+    assert ref.summary.n_impacts > 20
+    assert_same_run(fast, ref, scene, t_max=8.0)
+    assert abs(fast.summary.n_impacts - ref.summary.n_impacts) <= 0.05 * ref.summary.n_impacts
+
+
+# --- the rules are mirrored, and read when a run starts ------------------------------------------
+def test_chatter_rule_is_mirrored(monkeypatch):
+    """With the chatter rule disabled both paths step through the same longer impact sequence."""
+    m = RickerPulse.dimensionless(1.5, 1.0, EPS1.structure, "symmetric", 1)
+    with_rule = simulate_compiled(EPS1, m, settings=MINIMAL).summary.n_impacts
+    assert with_rule == simulate(EPS1, m, settings=MINIMAL).summary.n_impacts
+    monkeypatch.setattr(rules, "CHATTER_VELOCITY_RATIO", 0.0)
+    fast = simulate_compiled(EPS1, m, settings=MINIMAL)
+    ref = simulate(EPS1, m, settings=MINIMAL)
+    assert fast.summary.n_impacts == ref.summary.n_impacts > with_rule
+    row = run_pulse_grid(EPS1, [("symmetric", 1, 1.5, 1.0)]).iloc[0]
+    assert row["n_impacts"] == ref.summary.n_impacts
+
+
+def test_progress_guard_gives_invalid_not_exception(monkeypatch):
+    """A run that cannot advance ends 'invalid' with the reason, like the reference."""
+    monkeypatch.setattr(rules, "PROGRESS_WINDOW", 2)
+    monkeypatch.setattr(rules, "PROGRESS_MIN_ADVANCE", 1e3)
+    m = RickerPulse.dimensionless(2.5, 2.0, ASYM.structure, "antisymmetric", -1)
+    fast, ref = simulate_compiled(ASYM, m), simulate(ASYM, m)
+    assert ref.summary.status == fast.summary.status == "invalid"
+    assert "no progress" in fast.summary.reason
+    assert len(fast.history) == len(ref.history)
+    row = run_pulse_grid(ASYM, [("antisymmetric", -1, 2.5, 2.0)]).iloc[0]
+    assert row["status"] == "invalid" and "no progress" in row["reason"]
+
+
+def test_uplift_exactly_at_threshold_does_not_uplift():
+    """A pulse whose peak equals lambda g (a grazing touch) does not uplift (rules.py)."""
+    ref = compiled.reference_of(ASYM)
+    lam = ref.lam[1]
+    A = lam / math.tan(ASYM.alpha)
+    m = RickerPulse.dimensionless(A, 2.0, ASYM.structure, "symmetric", 1)
+    assert not simulate(ASYM, m).summary.uplifted
+    assert not simulate_compiled(ASYM, m).summary.uplifted
+    m2 = RickerPulse.dimensionless(A * 1.001, 2.0, ASYM.structure, "symmetric", 1)
+    a, b = simulate_compiled(ASYM, m2).summary, simulate(ASYM, m2).summary
+    assert a.uplifted and b.uplifted and a.t_uplift == pytest.approx(b.t_uplift, abs=1e-12)
+
+
+def test_without_numba_the_module_says_so(monkeypatch):
+    monkeypatch.setattr(compiled, "NUMBA_AVAILABLE", False)
+    monkeypatch.setattr(compiled, "NUMBA_ERROR", "numba could not be imported (test)")
+    with pytest.raises(BackendUnavailable, match="numba"):
+        simulate_compiled(ASYM, None, phi0=0.1)
+    with pytest.raises(BackendUnavailable, match="solver.simulate"):
+        run_pulse_grid(ASYM, [("symmetric", 1, 2.0, 2.0)])
+
+
+def test_same_argument_checks_as_reference():
+    for kw in ({"phi0": math.nan}, {"phi0": 2.0}, {"duration": -1.0}):
+        with pytest.raises(ValueError):
+            simulate_compiled(ASYM, None, **{"phi0": 0.1, **kw})
+    with pytest.raises(ValueError, match="phi0"):
+        simulate_compiled(ASYM, None)
+    with pytest.raises(ValueError, match="motion"):
+        simulate_compiled(ASYM, pd.DataFrame())

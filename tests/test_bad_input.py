@@ -1,0 +1,318 @@
+"""Issue 15: one regression test per hole found by trying bad input as a new user would.
+
+Each hole is checked where the user met it (the command line) and, where there is one, through
+the Python API. A refusal must be one line ``rockbench: error: ...`` naming the parameter (exit
+status 2); a valid input must run (exit 0) and report what the input describes.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+import rockbench as rb
+from rockbench.cli import main
+from rockbench.errors import ParameterError, RecordError, SceneError
+
+
+def cli(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def refused(capsys, *argv: str, names: tuple[str, ...] = ()) -> str:
+    """Run the CLI; assert exit 2 with one line ``rockbench: error: ...`` mentioning
+    ``names``; return that line."""
+    code, out, err = cli(capsys, *argv)
+    lines = err.strip().splitlines()
+    assert code == 2, (code, out, err)
+    assert len(lines) == 1 and lines[0].startswith("rockbench: error: "), err
+    assert "Traceback" not in err
+    for n in names:
+        assert n in lines[0], (n, lines[0])
+    return lines[0]
+
+
+@pytest.fixture
+def t_a_file(tmp_path):
+    """A ``t a`` record: 10 s at 0.01 s of a 1 Hz sine of 0.3 g."""
+    t = np.round(np.arange(0, 1001) * 0.01, 2)
+    a = 0.3 * np.sin(2 * np.pi * t)
+    path = tmp_path / "t_a.txt"
+    np.savetxt(path, np.c_[t, a], fmt="%.4f")
+    return path, t, a
+
+
+# --- silent garbage --------------------------------------------------------------------------
+def test_time_acceleration_file_is_read_as_time_and_acceleration(t_a_file):
+    """Before: the two columns were read row-major as one list of accelerations (PGA = the
+    last time, 10 g)."""
+    path, t, a = t_a_file
+    r = rb.load_record(path, dt=0.01, units="g")
+    assert r.npts == t.size
+    np.testing.assert_allclose(r.time, t, atol=1e-12)
+    np.testing.assert_allclose(r.samples, np.round(a, 4) * 9.80665, rtol=1e-12)
+    assert r.peak / 9.80665 == pytest.approx(0.3, rel=1e-3)
+
+
+def test_time_acceleration_file_through_the_cli(capsys, t_a_file):
+    path, _, _ = t_a_file
+    code, out, err = cli(capsys, "run", "housner-block", "--record", path, "--record-dt",
+                         "0.01", "--record-units", "g", "--duration", "2")
+    assert code == 0, err
+    assert "1001 samples" in out and "(0.3 g)" in out, out
+
+
+def test_unordered_time_column_is_refused(capsys, tmp_path, t_a_file):
+    _, t, a = t_a_file
+    idx = np.random.default_rng(1).permutation(t.size)
+    path = tmp_path / "shuffled.txt"
+    np.savetxt(path, np.c_[t[idx], a[idx]], fmt="%.4f")
+    with pytest.raises(RecordError, match="times must increase"):
+        rb.load_record(path, dt=0.01, units="g")
+    refused(capsys, "run", "housner-block", "--record", path, "--record-dt", "0.01",
+            "--record-units", "g", names=("shuffled.txt", "line"))
+
+
+def test_non_uniform_or_wrong_step_time_column_is_refused(tmp_path, t_a_file):
+    _, t, a = t_a_file
+    bent = t.copy()
+    bent[500:] += 0.004
+    path = tmp_path / "bent.txt"
+    np.savetxt(path, np.c_[bent, a], fmt="%.4f")
+    with pytest.raises(RecordError, match="not uniformly spaced"):
+        rb.load_record(path, dt=0.01, units="g")
+    path = tmp_path / "ok.txt"
+    np.savetxt(path, np.c_[t, a], fmt="%.4f")
+    with pytest.raises(RecordError, match="differs from record-dt"):
+        rb.load_record(path, dt=0.02, units="g")
+
+
+def test_two_samples_per_line_are_still_samples(tmp_path):
+    """A zero-mean accelerogram written two per line is not a time column."""
+    a = 0.2 * np.sin(np.arange(400) * 0.37)
+    path = tmp_path / "two.txt"
+    np.savetxt(path, a.reshape(-1, 2), fmt="%.6f")
+    r = rb.load_record(path, dt=0.01, units="g")
+    assert r.npts == 400
+
+
+@pytest.mark.parametrize("dt", ["5", "0.1", "1e-4", "1e-5"])
+def test_record_dt_outside_its_range_is_refused(capsys, t_a_file, dt):
+    path, _, _ = t_a_file
+    with pytest.raises(ParameterError, match="record-dt.*ROCKBENCH_RECORD_DT"):
+        rb.load_record(path, dt=float(dt), units="g")
+    refused(capsys, "run", "housner-block", "--record", path, "--record-dt", dt,
+            "--record-units", "g", names=("record-dt", "ROCKBENCH_RECORD_DT"))
+
+
+def test_record_dt_limit_can_be_widened(monkeypatch, tmp_path):
+    path = tmp_path / "a.dat"
+    path.write_text("0.1 0.2 0.3 0.2 0.1 0.0\n")
+    monkeypatch.setenv("ROCKBENCH_RECORD_DT", "1e-4,10")
+    assert rb.load_record(path, dt=5.0, units="g").dt == 5.0
+
+
+def test_rtol_of_one_or_more_is_refused(capsys):
+    """Before: rtol=2 ran and shifted the history by up to 0.26 alpha."""
+    from rockbench.analytic.solver import AnalyticSettings
+
+    for bad in (2.0, 1.0, 0.5):
+        with pytest.raises(ParameterError, match="rtol"):
+            AnalyticSettings(rtol=bad)
+    refused(capsys, "run", "housner-block", "--phi0", "0.5", "--setting", "rtol=2",
+            names=("rtol",))
+
+
+def test_scene_file_without_structure_is_refused(capsys, tmp_path):
+    """Before: a file without [structure] silently became the paper's asymmetric frame."""
+    for text in ('name = "mine"\n', 'name = "mine"\n[structure]\nspan = 9.0\n'):
+        path = tmp_path / "mine.toml"
+        path.write_text(text)
+        with pytest.raises(SceneError, match="structure"):
+            rb.load_scene(path)
+        line = refused(capsys, "run", path, "--phi0", "0.5", names=("structure",))
+        assert "type" in line
+
+
+def test_scene_file_with_unknown_tables_or_keys_is_refused(tmp_path):
+    cases = {'[structure]\ntype = "block"\n[tendons]\nk = 1\n': "tendons",
+             '[structure]\ntype = "block"\nwidht = 1.0\n': "widht",
+             'structure = 3\n': "structure",
+             '[structure]\ntype = "block"\n[devices]\nk = 1\n': "k",
+             'kind = "case-catalogue"\n': "not a scene"}
+    for text, name in cases.items():
+        path = tmp_path / "s.toml"
+        path.write_text(text)
+        with pytest.raises(SceneError, match=name):
+            rb.load_scene(path)
+
+
+# --- crashes ---------------------------------------------------------------------------------
+def test_very_low_frequency_is_refused_before_allocating(capsys):
+    """Before: W = 1e-6 tried to allocate 78.8 GiB."""
+    t = time.process_time()
+    refused(capsys, "run", "housner-block", "--pulse", "symmetric", "--amplitude", "2",
+            "--frequency", "1e-6", names=("W", "ROCKBENCH_W"))
+    assert time.process_time() - t < 5.0
+    scene = rb.load_scene("housner-block")
+    with pytest.raises(ParameterError, match="W"):
+        rb.RickerPulse.dimensionless(2.0, 1e-6, scene.structure)
+
+
+def test_huge_duration_is_refused_before_allocating(capsys):
+    """Before: pymunk with duration 1e9 tried to allocate 7.28 TiB."""
+    refused(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0", "0.5",
+            "--duration", "1e9", names=("duration", "ROCKBENCH_MAX_SAMPLES"))
+    scene = rb.load_scene("housner-block")
+    for engine in ("analytic", "pymunk"):
+        with pytest.raises(ParameterError, match="duration.*ROCKBENCH_MAX_SAMPLES"):
+            rb.run(scene, None, engine=engine, phi0=0.1, duration=1e9)
+
+
+def test_steps_limit_names_its_override(monkeypatch):
+    scene = rb.load_scene("housner-block")
+    monkeypatch.setenv("ROCKBENCH_MAX_STEPS", "100")
+    with pytest.raises(ParameterError, match="engine steps.*ROCKBENCH_MAX_STEPS"):
+        rb.run(scene, None, engine="pymunk", phi0=0.1, duration=1.0)
+    monkeypatch.setenv("ROCKBENCH_MAX_SAMPLES", "10")
+    with pytest.raises(ParameterError, match="ROCKBENCH_MAX_SAMPLES"):
+        rb.run(scene, None, phi0=0.1, duration=1.0)
+
+
+def test_long_default_window_of_a_slow_pulse_is_refused():
+    """A pulse whose default duration (6 T_g + 10 s) gives too many samples is refused naming
+    the duration, before the run allocates its grid."""
+    scene = rb.load_scene("housner-block")
+    pulse = rb.RickerPulse(1.0, 5e3)
+    with pytest.raises(ParameterError, match="duration.*default"):
+        rb.run(scene, pulse)
+
+
+def test_unwritable_out_is_one_line(capsys, tmp_path):
+    """Before: --out /proc/nope/x.csv ended in FileNotFoundError."""
+    refused(capsys, "run", "housner-block", "--phi0", "0.5", "--duration", "0.5", "--out",
+            "/proc/nope/x.csv", names=("--out", "/proc/nope"))
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    refused(capsys, "run", "housner-block", "--phi0", "0.5", "--duration", "0.5", "--out",
+            blocker / "x.csv", names=("--out",))
+
+
+def test_out_is_written_atomically(capsys, tmp_path, monkeypatch):
+    """A failed write leaves neither a half-written file nor a temporary one behind."""
+    import pandas as pd
+
+    out = tmp_path / "h.csv"
+    code, _, err = cli(capsys, "run", "housner-block", "--phi0", "0.5", "--duration", "0.5",
+                       "--out", out)
+    assert code == 0, err
+    good = out.read_text()
+    assert len(pd.read_csv(out)) > 10 and (tmp_path / "h_events.csv").is_file()
+
+    def broken(self, path, *a, **k):
+        with open(path, "w") as f:
+            f.write("t,phi\n0,")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", broken)
+    refused(capsys, "run", "housner-block", "--phi0", "0.4", "--duration", "0.5", "--out", out,
+            names=("--out", "No space left"))
+    assert out.read_text() == good
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["h.csv", "h_events.csv"]
+
+
+@pytest.mark.parametrize("motion", ["pulse", 3.0, {"kind": "ricker"}, [1, 2]])
+def test_run_with_a_motion_that_is_not_one_is_a_parameter_error(motion):
+    """Before: rb.run(scene, "pulse") raised a raw AttributeError."""
+    scene = rb.load_scene("housner-block")
+    with pytest.raises(ParameterError) as e:
+        rb.run(scene, motion)
+    assert e.value.name == "motion"
+    with pytest.raises(ParameterError) as e:
+        rb.get_backend("analytic")(scene).run(motion)
+    assert e.value.name == "motion"
+
+
+def test_run_with_a_scene_that_is_not_one_is_a_parameter_error():
+    for bad in ("housner-block", None, 3):
+        with pytest.raises(ParameterError) as e:
+            rb.run(bad, None, phi0=0.1)
+        assert e.value.name == "scene"
+    with pytest.raises(ParameterError) as e:
+        rb.run(rb.load_scene("housner-block"), None, engine=["analytic"], phi0=0.1)
+    assert e.value.name == "engine"
+
+
+# --- a hang ----------------------------------------------------------------------------------
+def test_very_high_frequency_is_refused_at_once(capsys):
+    """Before: W = 1e6 was still running after 120 s (the pulse knots covered the whole run
+    at T_g / 400)."""
+    t = time.process_time()
+    refused(capsys, "run", "housner-block", "--pulse", "symmetric", "--amplitude", "2",
+            "--frequency", "1e6", names=("W",))
+    assert time.process_time() - t < 5.0
+
+
+def test_pulse_knots_do_not_grow_with_the_run_length():
+    p = rb.RickerPulse(1.0, 1e-3)
+    k = p.knots(p.t_start, 1e4)
+    assert k.size <= 2 * 400 * 3 + 10
+    assert k[0] == p.t_start and k[-1] == 1e4
+
+
+def test_short_pulse_long_run_is_fast():
+    scene = rb.load_scene("housner-block")
+    pulse = rb.RickerPulse.dimensionless(3.0, 1000.0, scene.structure)
+    t = time.process_time()
+    r = rb.run(scene, pulse, duration=20.0)
+    assert time.process_time() - t < 10.0
+    assert r.summary.status == "ok"
+
+
+# --- a valid input refused -------------------------------------------------------------------
+def test_phi0_is_checked_against_the_fall_angle_of_its_direction(capsys):
+    """paper-asymmetric: counterclockwise fall 6.81 alpha, clockwise 8.75 alpha. Before,
+    -7 alpha was refused with the counterclockwise limit."""
+    scene = rb.load_scene("paper-asymmetric")
+    fall = {s: scene.fall_angles[s] / scene.alpha for s in (1, -1)}
+    assert fall[1] < 7.0 < fall[-1]
+    code, out, err = cli(capsys, "run", "paper-asymmetric", "--phi0", "-7", "--duration", "0.5")
+    assert code == 0, err
+    r = rb.run(scene, None, phi0=-7 * scene.alpha, duration=0.5)
+    assert r.summary.status == "ok"
+    assert r.history["phi"].iloc[0] == pytest.approx(-7 * scene.alpha, rel=1e-9)
+    line = refused(capsys, "run", "paper-asymmetric", "--phi0", "7", names=("--phi0",))
+    assert "6.811" in line
+    line = refused(capsys, "run", "paper-asymmetric", "--phi0", "-9", names=("--phi0",))
+    assert "8.75" in line
+    with pytest.raises(ParameterError, match="clockwise fall angle"):
+        rb.run(scene, None, phi0=-9 * scene.alpha, duration=0.5)
+
+
+# --- ranges of the pulse -------------------------------------------------------------------------
+@pytest.mark.parametrize("A, W, name", [(1e3, 3.0, "A"), (0.0, 3.0, "A"), (3.0, 5e3, "W"),
+                                        (3.0, 1e-3, "W"), (math.nan, 3.0, "A")])
+def test_pulse_coordinates_outside_their_range(A, W, name):
+    scene = rb.load_scene("paper-asymmetric")
+    with pytest.raises(ParameterError) as e:
+        rb.RickerPulse.dimensionless(A, W, scene.structure)
+    assert e.value.name == name
+    assert "ROCKBENCH_" in str(e.value) or math.isnan(A) or A == 0.0
+
+
+def test_limits_overrides_are_validated(monkeypatch):
+    from rockbench.limits import limit
+
+    monkeypatch.setenv("ROCKBENCH_W", "0.001,1e4")
+    assert limit("W") == (0.001, 1e4)
+    monkeypatch.setenv("ROCKBENCH_W", "big")
+    with pytest.raises(ParameterError, match="ROCKBENCH_W"):
+        limit("W")
+    monkeypatch.setenv("ROCKBENCH_MAX_SAMPLES", "-3")
+    with pytest.raises(ParameterError, match="ROCKBENCH_MAX_SAMPLES"):
+        limit("max_samples")

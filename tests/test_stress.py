@@ -1,0 +1,106 @@
+"""rockbench stress: every point is a row with an honest class, never a silent wrong answer."""
+
+import math
+
+import pandas as pd
+import pytest
+
+from rockbench import stress as S
+from rockbench.report.tradeoff_figures import plot_stability_map
+from rockbench.tradeoff import VERDICTS
+
+FREE_BLOCK = S.StressPoint("paper", 0.0, "housner-block", (), None, 0.5)
+
+
+def test_points_cover_every_axis_fast_and_full():
+    fast, full = S.stress_points(), S.stress_points(full=True)
+    assert {p.axis for p in fast} == set(S.AXES) | {"paper"}
+    assert len(fast) <= 25 < len(full)
+    a = [p.value for p in full if p.axis == "alpha"]
+    assert min(a) == 0.05 and max(a) == 0.6
+    dt = [p.value for p in full if p.axis == "dt"]
+    assert min(dt) == 1e-5 and max(dt) == 1e-2        # 1e-2: the largest step allowed
+    with pytest.raises(Exception):
+        S.stress_points(axes=["nope"])
+
+
+def test_a_good_run_is_within_1_percent():
+    row = S.run_point(("pymunk", FREE_BLOCK))
+    assert row["status"] == "ok" and row["class"] == "within 1%"
+    assert row["error"] < 0.01 and row["cpu_s"] > 0
+
+
+def test_a_deliberately_broken_run_is_diverged_not_ok():
+    """A run whose contacts may not slide at all (max_sliding 1 nm) is reported diverged, with
+    its reason, and classified so."""
+    pt = FREE_BLOCK.__class__("dt", 1e-3, "housner-block", (), None, 0.5,
+                              (("max_sliding", 1e-9),))
+    row = S.run_point(("pymunk", pt))
+    assert row["status"] == "diverged" and row["class"] == "diverged"
+    assert "sliding" in row["reason"] and row["error"] == math.inf
+
+
+def test_an_impossible_setting_is_an_invalid_row():
+    pt = FREE_BLOCK.__class__("dt", 0.05, "housner-block", (), None, 0.5, (("dt", 0.05),))
+    row = S.run_point(("pymunk", pt))
+    assert row["class"] == "invalid" and "dt" in row["reason"]
+
+
+def test_unmeasurable_eta_is_invalid_not_ok():
+    """output_dt = 10 ms under a pulse: the run is 'ok' but measures no eta (issue 13): the
+    stress row says invalid."""
+    pulse = (("A", 2.5), ("W", 3.0), ("kind", "ricker"), ("shape", "symmetric"), ("sign", 1))
+    pt = FREE_BLOCK.__class__("dt", 1e-3, "housner-block", (), pulse, 0.0,
+                              (("output_dt", 1e-2),))
+    row = S.run_point(("pymunk", pt))
+    if row["status"] == "ok":
+        assert row["class"] == "invalid" and "eta" in row["flags"]
+    else:  # once the engine loop itself refuses such a run
+        assert row["class"] in ("invalid", "diverged")
+
+
+def _table(rebound_in: int):
+    rows = []
+    for i, eng in enumerate(["a", "b", "c"]):
+        rows.append({"engine": eng, "axis": "alpha", "value": 0.6, "status": "ok",
+                     "class": "off", "engine_class": "off", "error": 0.8, "reason": "",
+                     "flags": "", "contact_opened": i < rebound_in,
+                     "eta_ratio_max": 3.0 if i < rebound_in else 1.0, "model_validity": ""})
+        rows.append({"engine": eng, "axis": "alpha", "value": 0.05, "status": "ok",
+                     "class": "within 1%", "engine_class": "within 1%", "error": 0.001,
+                     "reason": "", "flags": "", "contact_opened": False, "eta_ratio_max": 1.0,
+                     "model_validity": ""})
+    return pd.DataFrame(rows)
+
+
+def test_rebounding_impacts_put_a_point_outside_the_model():
+    out = S._validity(_table(rebound_in=2))
+    stocky = out[out["value"] == 0.6]
+    assert (stocky["class"] == "outside model").all()
+    assert stocky["model_validity"].str.startswith("outside").all()
+    assert (stocky["engine_class"] == "off").all()
+    assert (out[out["value"] == 0.05]["model_validity"] == "inside").all()
+    # one engine alone rebounding is that engine's fault, not the model's
+    single = S._validity(_table(rebound_in=1))
+    assert (single[single["value"] == 0.6]["class"] == "off").all()
+
+
+def test_breaking_points_and_map():
+    t = _table(rebound_in=1)
+    b = S.breaking_points(t)
+    assert set(b["engine"]) == {"a", "b", "c"}
+    assert (b["value"] == 0.6).all() and (b["side"] == "above").all()
+    fig = plot_stability_map(t, "a")
+    assert len(fig.get_axes()) == 1
+    assert set(t["class"]) <= set(VERDICTS)
+
+
+@pytest.mark.slow
+def test_fast_form_pymunk_every_point_has_a_class():
+    s = S.stress(["pymunk"], executor="serial")
+    t = s.table
+    assert len(t) == len(S.stress_points())
+    assert set(t["class"]) <= set(VERDICTS)
+    bad = t[t["class"].isin(["diverged", "invalid"])]
+    assert (bad["reason"].str.len() > 0).all()
+    assert (t[t["axis"] == "paper"]["class"] == "within 1%").all()
