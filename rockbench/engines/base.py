@@ -39,7 +39,7 @@ Rigid-body engines subclass :class:`EngineBackend`, whose ``run`` is written onc
     :class:`~rockbench.engines.devices.PointForce` list (device forces computed by the loop
     from the poses; empty for a free-standing scene) applied during the step.
 ``_state(self) -> ndarray (n_bodies, 6)``
-    x, y [m], theta [rad] (rotation from rest, continuous, + counterclockwise), vx, vy [m/s],
+    A new float array (the loop keeps it) of x, y [m], theta [rad] (rotation from rest, continuous, + counterclockwise), vx, vy [m/s],
     omega [rad/s] of each body's centre of mass, in the order of ``self.specs``.
 ``_close(self)``
     Release engine resources (physics clients, ...).

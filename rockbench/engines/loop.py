@@ -43,7 +43,7 @@ from .bodies import BodySpec
 from .contacts import ContactProbe
 from .devices import DAMPER_MODELS, DeviceGeometry
 
-__all__ = ["Stepped", "step_run", "finish", "PROBE_CHUNK"]
+__all__ = ["Stepped", "step_run", "finish", "SampleChecks", "device_geometry", "PROBE_CHUNK"]
 
 #: Output samples probed together (vectorized) for the penetration / sliding divergence check.
 PROBE_CHUNK = 500
@@ -137,7 +137,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     sample_intact = np.zeros(n_out, dtype=bool)
     native_report: list[tuple] = []
     out = Stepped(grid=grid, states=states[:0], intact=sample_intact[:0])
-    checker = _SampleChecks(cfg, specs, probe, crit, uplift_phi,
+    checker = SampleChecks(cfg, specs, probe, crit, uplift_phi,
                             free=motion is None and devices is None)
     n = 0                              # samples written
     no_forces: tuple = ()
@@ -149,6 +149,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     try:
         backend._build()
         state = np.array(read(), dtype=float)
+        gridl = grid.tolist()
         prev_t, prev = None, None
         t = t0
         for k in range(n_steps + 1):
@@ -156,11 +157,11 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
             if phi != phi:
                 raise Diverged(f"non-finite body state at t={t:.6g} s")
             # output samples on the fixed grid (linear interpolation between steps)
-            while n < n_out and grid[n] <= t + t_tol:
-                if prev is None or t == prev_t:
+            while n < n_out and gridl[n] <= t + t_tol:
+                if prev is None or t == prev_t or gridl[n] == t:
                     states[n] = state
                 else:
-                    w = (grid[n] - prev_t) / (t - prev_t)
+                    w = (gridl[n] - prev_t) / (t - prev_t)
                     states[n] = prev + w * (state - prev)
                 sample_intact[n] = intact
                 if native:
@@ -202,7 +203,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
             backend.steps += 1
             prev_t, prev = t, state
             t = t_steps[k]
-            state = np.array(read(), dtype=float)
+            state = np.asarray(read(), dtype=float)      # a new array every step (contract)
         checker.check(states, sample_intact, grid, n, out)
     except Diverged as e:
         out.status, out.reason = "diverged", str(e)
@@ -223,7 +224,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     return out
 
 
-class _SampleChecks:
+class SampleChecks:
     """The divergence checks that run on the output samples, in vectorized chunks: a
     non-finite state, mechanical energy growing without input (free rocking), contact
     penetration or sliding beyond the settings' tolerances (samples past the critical angle

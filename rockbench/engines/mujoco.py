@@ -56,6 +56,7 @@ See ``docs/engines/mujoco.md`` for the measurements behind every default.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -65,6 +66,7 @@ from ..constants import G
 from ..errors import ParameterError, check_finite, check_range
 from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, PointForce
+from .loop import Diverged, SampleChecks, Stepped, device_geometry, finish
 
 __all__ = ["MujocoBackend", "MujocoSettings"]
 
@@ -334,6 +336,11 @@ class MujocoBackend(EngineBackend):
                     self._damped.append((3 * idx + 2, self.specs[idx].half_width, heel))
             self._c = float(dv.damping)
         mujoco.mj_forward(m, self.data)
+        # views kept once (MjData's attribute access builds a new array wrapper every call)
+        n = len(self.specs)
+        self._q3 = self.data.qpos.reshape(n, 3)
+        self._v3 = self.data.qvel.reshape(n, 3)
+        self._gravity = m.opt.gravity
         if self._damped:
             self._set_dampers()
 
@@ -381,7 +388,7 @@ class MujocoBackend(EngineBackend):
 
     def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
         m, d = self.model, self.data
-        m.opt.gravity[0] = gravity_x
+        self._gravity[0] = gravity_x
         if self._damped:
             self._set_dampers()
         if not forces:
@@ -402,13 +409,164 @@ class MujocoBackend(EngineBackend):
         qf[:] = 0.0
 
     def _state(self) -> np.ndarray:
-        n = len(self.specs)
-        q = self.data.qpos.reshape(n, 3)
-        out = np.empty((n, 6))
+        q = self._q3
+        out = np.empty((q.shape[0], 6))
         out[:, 0:2] = self._rest + q[:, 0:2]
         out[:, 2] = q[:, 2]
-        out[:, 3:6] = self.data.qvel.reshape(n, 3)
+        out[:, 3:6] = self._v3
         return out
 
     def _close(self) -> None:
         self.data = None
+
+
+# ------------------------------------------------------------------------------------------
+# Batched runs: many ground motions of one scene in mujoco.rollout (the whole run in C)
+# ------------------------------------------------------------------------------------------
+def batch_refusal(scene, settings: MujocoSettings) -> str | None:
+    """Why the batched path cannot run ``scene`` with ``settings`` (None: it can). Between two
+    steps it can change nothing, so it refuses what needs Python there: dampers (their
+    coefficients follow the state), fracture (devices removed mid-run) and devices applied as
+    shared point forces."""
+    if scene.has_devices:
+        dv = scene.devices
+        if settings.devices != "native":
+            return "devices='forces' are computed from the poses between steps"
+        if dv.has_dampers:
+            return "the dampers' coefficients are updated from the state between steps"
+        if dv.fracture_strain is not None:
+            return "fracture removes the tendons between steps"
+    return None
+
+
+def run_batch(scene, motions, *, duration: float | None = None, settings=None,
+              nthread: int | None = None, **overrides) -> list:
+    """Run ``scene`` under each ground motion of ``motions`` (from rest, phi0 = 0) in MuJoCo,
+    with the whole run of every case inside ``mujoco.rollout`` (threads: ``nthread``, default
+    one per core), and return one :class:`~rockbench.result.Result` per motion - the same
+    Result the plain path (``rb.run(scene, m, engine="mujoco")``) gives, to within floating
+    point: the ground motion enters as the open-loop generalized force m_i * (-u_g''(t +
+    dt/2)) on every body's slide-x joint (``qfrc_applied``) instead of a horizontal gravity,
+    which is the same force summed in another order (tested against the plain path).
+
+    Raises ParameterError naming the reason when :func:`batch_refusal` refuses the scene
+    (callers fall back to the plain path). ``duration`` [s] as in ``run`` (None: each motion's
+    length + 10 s)."""
+    import time
+
+    import mujoco
+    from mujoco import rollout
+
+    from .base import run_window
+
+    backend = MujocoBackend(scene, settings, **overrides)
+    cfg = backend.settings
+    why = batch_refusal(scene, cfg)
+    if why is not None:
+        raise ParameterError("scene", scene.name, "a scene the batched MuJoCo path can run", why)
+    ok, version = MujocoBackend.available()
+    if not ok:
+        from ..errors import BackendUnavailable
+        raise BackendUnavailable(f"backend 'mujoco' is not available: {version}")
+    motions = list(motions)
+    backend.build(0.0)
+    m, d = backend.model, backend.data
+    nb, nq, nv = len(backend.specs), m.nq, m.nv
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state0 = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, d, state0, spec)
+    masses = np.array([sp.mass for sp in backend.specs])
+    dt = cfg.dt
+    windows, groups = [], {}
+    for i, mo in enumerate(motions):
+        t0, t_end = run_window(scene, mo, duration, 0.0)
+        n_steps = int(math.ceil((t_end - t0) / dt - 1e-9))
+        windows.append((t0, t_end, n_steps))
+        groups.setdefault(n_steps, []).append(i)
+    nthread = nthread or os.cpu_count() or 1
+    datas = [mujoco.MjData(m) for _ in range(max(1, nthread))]
+    runner = rollout.Rollout(nthread=nthread if nthread > 1 else None)
+    results: list = [None] * len(motions)
+    for n_steps, idx in groups.items():
+        ctrl = np.zeros((len(idx), n_steps, nv))
+        for j, i in enumerate(idx):
+            t0 = windows[i][0]
+            t_steps = t0 + np.arange(1, n_steps + 1) * dt
+            t_mid = np.concatenate(([t0], t_steps[:-1])) + 0.5 * dt
+            gx = -np.asarray(motions[i].acceleration(t_mid), dtype=float)
+            ctrl[j][:, 0:3 * nb:3] = gx[:, None] * masses[None, :]
+        init = np.repeat(state0[None, :], len(idx), axis=0)
+        wall = time.perf_counter()
+        state, _ = runner.rollout([m] * len(idx), datas, init, ctrl,
+                                  control_spec=mujoco.mjtState.mjSTATE_QFRC_APPLIED,
+                                  nstep=n_steps)
+        wall = (time.perf_counter() - wall) / len(idx)
+        for j, i in enumerate(idx):
+            q = np.concatenate((state0[None, 1:1 + nq], state[j, :, 1:1 + nq]))
+            v = np.concatenate((state0[None, 1 + nq:1 + nq + nv],
+                                state[j, :, 1 + nq:1 + nq + nv]))
+            results[i] = _finish_batch(backend, motions[i], windows[i], q, v, wall, version)
+    return results
+
+
+def _finish_batch(backend, motion, window, q, v, wall: float, version: str):
+    """Step states (n_steps + 1, nq), (.., nv) of one batched case -> its Result, through the
+    loop's sampling rules (overturn stop, samples on the output grid, sample checks)."""
+    from ..analytic.reference import reference_of
+    from ..result import output_grid
+    from .contacts import ContactProbe
+
+    scene, cfg = backend.scene, backend.settings
+    t0, t_end, n_steps = window
+    nb = len(backend.specs)
+    S = np.empty((n_steps + 1, nb, 6))
+    q3, v3 = q.reshape(-1, nb, 3), v.reshape(-1, nb, 3)
+    S[:, :, 0:2] = backend._rest[None] + q3[:, :, 0:2]
+    S[:, :, 2] = q3[:, :, 2]
+    S[:, :, 3:6] = v3
+    times = np.concatenate(([t0], t0 + np.arange(1, n_steps + 1) * cfg.dt))
+    phi = S[:, 0, 2]
+    fall_p, fall_n = scene.fall_angles[1], scene.fall_angles[-1]
+    over = np.flatnonzero((phi >= fall_p) | (-phi >= fall_n))
+    out = Stepped(grid=output_grid(t0, t_end, cfg.output_dt), states=S[:0],
+                  intact=np.zeros(0, bool))
+    last = n_steps
+    if over.size:
+        last = int(over[0])
+        out.overturned, out.t_overturn = True, float(times[last])
+        out.events.append(dict(t=float(times[last]), kind="overturn", phi=float(phi[last]),
+                               phidot_before=float(S[last, 0, 5]),
+                               phidot_after=float(S[last, 0, 5]),
+                               direction=1 if phi[last] > 0 else -1))
+    # samples: the first step at or after each grid time (within the loop's tolerance),
+    # interpolated from the step before unless the times coincide
+    grid = out.grid
+    tol = 1e-9 * cfg.dt
+    k = np.searchsorted(times[:last + 1], grid - tol, side="left")
+    keep = k <= last
+    grid_k, k = grid[keep], k[keep]
+    exact = (k == 0) | (times[k] == grid_k)
+    km = np.maximum(k - 1, 0)
+    w = np.where(exact, 1.0, (grid_k - times[km]) / np.where(exact, 1.0, times[k] - times[km]))
+    samples = np.where(exact[:, None, None], S[k],
+                       S[km] + w[:, None, None] * (S[k] - S[km]))
+    out.states = samples
+    out.intact = np.full(len(samples), scene.has_devices)
+    out.steps, out.wall_s = last, wall * last / max(n_steps, 1)
+    checker = SampleChecks(cfg, backend.specs, ContactProbe(scene, backend.specs),
+                            reference_of(scene).critical, cfg.uplift_tol * scene.alpha,
+                            free=False)
+    try:
+        checker.check(samples, out.intact, grid, len(samples), out)
+    except Diverged as e:
+        out.status, out.reason = "diverged", str(e)
+        if checker.stop_at is not None:
+            out.states, out.intact = samples[:checker.stop_at], out.intact[:checker.stop_at]
+    out.max_penetration, out.max_sliding = checker.max_pen, checker.max_slide
+    devices = device_geometry(backend)
+    if devices is not None:                     # native tendons: k x the shared elongations
+        el = devices.history(out.states)[0]
+        out.native_report = [(list(devices.k * e), [0.0, 0.0]) for e in el]
+    return finish(scene, motion, cfg, backend.specs, out, phi0=0.0, t0=t0,
+                  backend_name="mujoco", engine_version=version,
+                  devices=devices)

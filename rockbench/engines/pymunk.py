@@ -115,9 +115,18 @@ class PymunkBackend(EngineBackend):
             s.elasticity = 0.0
         space.add(*shapes)
         self._space = space
+        # Chipmunk's C entry points (pymunk's cffi library): gravity, step and the state read
+        # are the per-step work, and pymunk's Python wrappers (locking for callbacks, Vec2d
+        # objects) cost as much as the step itself. rockbench adds and removes nothing during
+        # a run and registers no callback, so calling Chipmunk directly is exact.
+        from pymunk._chipmunk_cffi import lib
+        self._cspace = space._space
+        self._cbodies = [b._body for b in self._bodies]
+        self._c = (lib.cpSpaceSetGravity, lib.cpSpaceStep, lib.cpBodyGetPosition,
+                   lib.cpBodyGetAngle, lib.cpBodyGetVelocity, lib.cpBodyGetAngularVelocity)
 
     def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
-        self._space.gravity = (gravity_x, -G)
+        self._c[0](self._cspace, (gravity_x, -G))
         if forces:
             # one force and one torque per body (Chipmunk clears them after every step)
             for body, (fx, fy, tau) in zip(self._bodies,
@@ -125,13 +134,17 @@ class PymunkBackend(EngineBackend):
                 if fx or fy or tau:
                     body.force = (fx, fy)
                     body.torque = tau
-        self._space.step(self.settings.dt)
+        self._c[1](self._cspace, self.settings.dt)
 
     def _state(self) -> np.ndarray:
-        self._last = np.array([[b.position.x, b.position.y, b.angle, b.velocity.x,
-                                b.velocity.y, b.angular_velocity] for b in self._bodies])
+        _, _, pos, ang, vel, omega = self._c
+        out = []
+        for b in self._cbodies:
+            p, v = pos(b), vel(b)
+            out.append((p.x, p.y, ang(b), v.x, v.y, omega(b)))
+        self._last = np.array(out)
         return self._last
 
     def _close(self) -> None:
-        self._space = None
-        self._bodies = []
+        self._space = self._cspace = None
+        self._bodies = self._cbodies = []

@@ -101,6 +101,57 @@ def _run_normalized(norm: dict[str, Any]) -> dict[str, Any]:
     return run_case(norm)
 
 
+#: MuJoCo cases run together in one ``mujoco.rollout`` call (one executor item).
+BATCH_SIZE = 16
+
+
+def _batch_key(norm: dict[str, Any]) -> str | None:
+    """The group of a case that the batched MuJoCo path can run with others (same scene,
+    overrides, settings and duration, from rest under a ground motion), or None."""
+    if norm["engine"] != "mujoco" or norm["motion"] is None or norm["phi0"] != 0.0:
+        return None
+    return json.dumps([norm["scene"], norm["overrides"], norm["settings"], norm["duration"]],
+                      sort_keys=True)
+
+
+def run_batch_cases(norms: list[dict[str, Any]], nthread: int | None = 1) -> list[dict]:
+    """Rows of MuJoCo cases of one batch group (:func:`_batch_key`) run together by
+    :func:`rockbench.engines.mujoco.run_batch`; a scene the batched path refuses (dampers,
+    fracture) falls back to :func:`run_case` one by one. ``run_s`` of each row is its share
+    of the batch."""
+    from ..engines.mujoco import MujocoBackend, batch_refusal, run_batch
+    from ..scene.motion import motion_from_spec
+    from ..scene.scene import load_scene
+
+    t = time.perf_counter()
+    first = norms[0]
+    try:
+        scene = load_scene(first["scene"], first["overrides"] or None)
+        why = batch_refusal(scene, MujocoBackend(scene, **first["settings"]).settings)
+        if why is not None:
+            return [run_case(n) for n in norms]
+        motions = [motion_from_spec(n["motion"], scene.structure) for n in norms]
+        results = run_batch(scene, motions, duration=first["duration"], nthread=nthread,
+                            **first["settings"])
+    except Exception:  # anything the batch cannot do: the plain path, case by case
+        return [run_case(n) for n in norms]
+    share = (time.perf_counter() - t) / len(norms)
+    rows = []
+    for n, r in zip(norms, results):
+        row = _base_row(n)
+        row.update(_result_fields(r))
+        row["run_s"] = share
+        row["finished_at"] = _now()
+        rows.append(row)
+    return rows
+
+
+def _run_item(item: tuple) -> Any:
+    """An executor item: ("case", norm) -> row, ("batch", [norm, ...]) -> rows."""
+    kind, payload = item
+    return run_batch_cases(payload) if kind == "batch" else _run_normalized(payload)
+
+
 # =========================================================================================
 # The frame
 # =========================================================================================
@@ -152,7 +203,7 @@ def _frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
 def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = None,
               executor: str = "process", workers: int | None = None,
               dask_address: str | None = None, progress: bool = True,
-              retry_errors: bool = False) -> pd.DataFrame:
+              retry_errors: bool = False, batch: bool = True) -> pd.DataFrame:
     """Run every case and return one row per case, in input order (``docs/sweeps.md``).
 
     Parameters
@@ -171,6 +222,10 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
         Show a tqdm bar naming the running cases.
     retry_errors : bool
         Run again the cases the store holds with status ``"error"``.
+    batch : bool
+        Run MuJoCo cases of one scene and settings together in ``mujoco.rollout``
+        (:func:`run_batch_cases`; default True); scenes the batched path refuses fall back to
+        the plain path.
 
     Columns: ``case_id``, the flattened case (``scene``, ``overrides.<k>``, ``engine``,
     ``settings.<k>``, ``motion.kind``, ``motion.<k>``, ``phi0`` [rad], ``duration`` [s]), then
@@ -200,10 +255,42 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
         if directory is not None:
             S.write_row(directory, row)
 
-    execute(_run_normalized, list(todo.items()), on_result=on_result, crashed=_error_row,
-            label=case_label, is_error=lambda row: row.get("status") == "error",
+    # MuJoCo cases of one scene and settings run batched (mujoco.rollout), BATCH_SIZE a batch
+    items: list[tuple[str, tuple]] = []
+    groups: dict[str, list[tuple[str, dict]]] = {}
+    for cid, n in todo.items():
+        key = _batch_key(n) if batch else None
+        if key is None:
+            items.append((cid, ("case", n)))
+        else:
+            groups.setdefault(key, []).append((cid, n))
+    ids_of: dict[str, list[str]] = {}
+    for members in groups.values():
+        for i in range(0, len(members), BATCH_SIZE):
+            chunk = members[i:i + BATCH_SIZE]
+            key = f"batch-{chunk[0][0]}-{len(chunk)}"
+            ids_of[key] = [c for c, _ in chunk]
+            items.append((key, ("batch", [n for _, n in chunk])))
+
+    def on_item(key: str, out: Any) -> None:
+        if key in ids_of:
+            for cid, row in zip(ids_of[key], out):
+                on_result(cid, row)
+        else:
+            on_result(key, out)
+
+    def crashed(item: tuple, reason: str) -> Any:
+        kind, payload = item
+        if kind == "batch":
+            return [_error_row(n, reason) for n in payload]
+        return _error_row(payload, reason)
+
+    execute(_run_item, items, on_result=on_item, crashed=crashed,
+            label=lambda item: (case_label(item[1]) if item[0] == "case"
+                                else f"{len(item[1])} mujoco cases (batched)"),
+            is_error=lambda out: (isinstance(out, dict) and out.get("status") == "error"),
             executor=executor, workers=workers, dask_address=dask_address, progress=progress,
-            desc="sweep", unit="case")
+            desc="sweep", unit="item")
     if directory is not None and todo:
         S.compact(directory)
     return _frame([done[cid] for cid in ids])
