@@ -11,6 +11,12 @@ Commands (``docs/cli.md`` shows each with real output)::
                        [--set ...] [--setting ...] [--report DIR] [--csv FILE] [--json]
     rockbench report   [--out DIR] [--records DIR] [--engines a,b,...] [--quick]
                        [--workers N] [--dask ADDRESS] [--store PATH]
+    rockbench tradeoff SCENE [--engines a,b,...] [--dt 4e-3,2e-3,...] [--setting [ENGINE:]N=V ...]
+                       [--repeat N] [--quick] [--workers N] [--store PATH] [--out DIR] [--json]
+    rockbench advise   SCENE --tolerance 0.02 [--engines a,b,...] [--quick] [--store PATH]
+                       [--workers N] [--json]
+    rockbench stress   [--engines a,b,...] [--full] [--axes a,b,...] [--workers N] [--out DIR]
+                       [--json]
 
 MOTION is one of
 ``--pulse symmetric|antisymmetric [--sign 1|-1] --amplitude A --frequency W`` (A = a_g /
@@ -19,8 +25,11 @@ MOTION is one of
 phi0 = X alpha). Units: SI and radians; times in s.
 
 Errors: any bad input (a :class:`rockbench.errors.RockbenchError` or an argument the parser
-rejects) prints one line ``rockbench: error: ...`` on stderr and returns 2, without a traceback.
-Any other exception is a bug and keeps its traceback.
+rejects) prints one line ``rockbench: error: ...`` on stderr and returns 2, without a traceback;
+so does an output (``--out``, ``--csv``, ``--report``) that cannot be written, checked before the
+run. Outputs are written to a temporary name and renamed, never half-written. Any other
+exception is a bug and keeps its traceback. ``docs/errors.md`` lists the limits and the inputs
+tried.
 """
 
 from __future__ import annotations
@@ -205,7 +214,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("report", help="run the default campaign and write the HTML report")
     p.add_argument("--out", default="reports", metavar="DIR", help="output folder (reports)")
-    p.add_argument("--records", metavar="DIR", help="also run every record in this folder")
+    p.add_argument("--records", metavar="DIR", help="run every record in this folder "
+                   "(default: the records bundled in the package; none with --quick)")
     p.add_argument("--engines", type=_names, metavar="A,B,...",
                    help="backends (default: every available one)")
     p.add_argument("--quick", action="store_true", help="a small campaign (minutes)")
@@ -214,7 +224,87 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run the cases on a dask.distributed scheduler at ADDRESS")
     p.add_argument("--store", metavar="PATH",
                    help="result store (Parquet or CSV); finished cases are skipped on a rerun")
+    from .cli_choosing import add_choosing_commands
+
+    add_choosing_commands(sub)
+    _add_map_command(sub)
     return parser
+
+
+def _add_map_command(sub) -> None:
+    """map (issue 11; docs/maps.md)."""
+    p = sub.add_parser("map", help="overturning map of a scene over (A, W) under Ricker pulses, "
+                       "or --compare two stored maps")
+    p.add_argument("scene", metavar="SCENE", nargs="?",
+                   help="a built-in scene name or a path to a .toml file")
+    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=_key_value,
+                   action="append", default=[], help="override a scene parameter")
+    p.add_argument("--engine", default="analytic", metavar="NAME", help="backend (default "
+                   "analytic, through its compiled path)")
+    p.add_argument("--grid", default="100x100", metavar="NAxNW",
+                   help="points along A and W (default 100x100)")
+    p.add_argument("--amplitude", default="0.5:8", metavar="LO:HI",
+                   help="A = a_g / (g tan alpha), inclusive range (default 0.5:8)")
+    p.add_argument("--frequency", default="0.5:10", metavar="LO:HI",
+                   help="W = omega_g / p, inclusive range (default 0.5:10)")
+    p.add_argument("--pulses", default="all", metavar="P",
+                   help="all, or a comma-separated subset of symmetric+, symmetric-, "
+                        "antisymmetric+, antisymmetric-")
+    p.add_argument("--setting", dest="settings", metavar="NAME=VALUE", type=_key_value,
+                   action="append", default=[], help="a backend setting (analytic: "
+                   "method=compiled|solve_ivp)")
+    p.add_argument("--store", metavar="FILE.parquet",
+                   help="resumable Parquet store (a folder; default maps/SCENE_ENGINE.parquet)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=_count, metavar="N", help="local worker processes")
+    g.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    p.add_argument("--compare", nargs=2, metavar=("A.parquet", "B.parquet"),
+                   help="overlay two stored maps: agreement, kappa, boundary shift; "
+                        "writes B's overlay figure next to B")
+    p.add_argument("--json", action="store_true", help="print JSON")
+
+
+def cmd_map(args: argparse.Namespace) -> int:
+    from .maps import describe_shift, load_map, map_agreement, run_map
+
+    if args.compare:
+        a, b = (load_map(x) for x in args.compare)
+        ag = map_agreement(a, b)
+        out = {k: v for k, v in ag.items() if k != "shift"}
+        out["boundary"] = ag["shift"].to_dict(orient="records")
+        out["in_words"] = describe_shift(ag["shift"], Path(args.compare[1]).stem)
+        if args.json:
+            _print_json(out)
+            return 0
+        print(f"{args.compare[1]} against {args.compare[0]}: {ag['n']} cells, "
+              f"{100 * ag['fraction']:.2f} % agree, Cohen's kappa {ag['kappa']:.3f}")
+        print(out["in_words"])
+        return 0
+    if not args.scene:
+        raise ParameterError("SCENE", None, "a scene name or .toml path (or --compare A B)")
+    from .cli_input import scene_overrides as _overrides
+
+    scene_overrides = _overrides(args.overrides) if args.overrides else None
+    settings = dict(args.settings)
+    method = settings.pop("method", None)
+    if args.engine != "analytic" and settings:
+        settings = backend_overrides(args.engine, argparse.Namespace(
+            settings=list(settings.items()), dt=None))
+    store = args.store or str(Path("maps") / f"{Path(args.scene).stem}_{args.engine}.parquet")
+    df = run_map(args.scene, args.engine, grid=args.grid, amplitude=args.amplitude,
+                 frequency=args.frequency, pulses=args.pulses, overrides=scene_overrides,
+                 settings=settings, method=method, store=store, workers=args.workers,
+                 scheduler=args.scheduler, progress=sys.stderr.isatty() and not args.json)
+    summary = {"scene": args.scene, "engine": args.engine, "cells": len(df),
+               "reused": int(df.attrs.get("reused", 0)), "store": store,
+               "overturned": int(df["overturned"].fillna(False).astype(bool).sum()),
+               "not_ok": int((df["status"] != "ok").sum()), "method": df.attrs.get("method")}
+    if args.json:
+        _print_json(summary)
+        return 0
+    print(f"{args.scene}, {args.engine}: {summary['cells']} cells ({summary['reused']} reused "
+          f"from {store}), {summary['overturned']} overturn, {summary['not_ok']} not ok")
+    return 0
 
 
 # ==============================================================================================
@@ -329,20 +419,57 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _output_folder(path: Path, option: str) -> None:
+    """Create the folder of output ``path`` (given with ``option``) now, before any run, and
+    check it can be written: a one-line error naming the option otherwise."""
+    folder = path.parent
+    try:
+        if path.is_dir():
+            raise RockbenchError(f"cannot write {option} {path}: it is a folder")
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise RockbenchError(f"cannot write {option} {path}: {e.strerror or e}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise RockbenchError(f"cannot write {option} {path}: folder {folder} is not writable")
+
+
+def _write_atomic(files: dict[Path, Any], option: str) -> None:
+    """Write each DataFrame of ``files`` {path: frame} as CSV to a temporary name beside it,
+    then rename them all into place: either every file is complete or none is changed (and no
+    temporary file is left). Failures are one-line errors naming ``option``."""
+    tmps: dict[Path, Path] = {}
+    try:
+        for path, frame in files.items():
+            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+            tmps[path] = tmp
+            frame.to_csv(tmp, index=False)
+        for path, tmp in tmps.items():
+            os.replace(tmp, path)
+    except OSError as e:
+        raise RockbenchError(f"cannot write {option} {next(iter(files))}: "
+                             f"{e.strerror or e}") from None
+    finally:
+        for tmp in tmps.values():
+            try:
+                tmp.unlink()
+            except OSError:
+                pass
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from . import runner
 
     scene = load_scene_from(args)
     overrides = backend_overrides(args.engine, args)
     motion, phi0 = motion_from(args, scene)
+    if args.out:
+        _output_folder(Path(args.out), "--out")  # before the run: fail fast
     result = runner.run(scene, motion, engine=args.engine, duration=args.duration, phi0=phi0,
-                 **overrides)
+                        **overrides)
     files = {}
     if args.out:
         out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        result.history.to_csv(out, index=False)
-        result.events.to_csv(_events_path(out), index=False)
+        _write_atomic({out: result.history, _events_path(out): result.events}, "--out")
         files = {"history_csv": str(out), "events_csv": str(_events_path(out))}
 
     if args.json:
@@ -421,6 +548,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
         resolve_engines(args.engines, name="--engines")  # unknown names fail here, by name
     motion, phi0 = motion_from(args, scene)
     settings = compare_settings(args.engines, args)
+    if args.csv:
+        _output_folder(Path(args.csv), "--csv")
+    if args.report:
+        _output_folder(Path(args.report) / "index.html", "--report")
     comparison = compare_mod.compare(scene, motion, engines=args.engines, phi0=phi0,
                          duration=args.duration, settings=settings,
                          progress=sys.stderr.isatty() and not args.json)
@@ -428,12 +559,15 @@ def cmd_compare(args: argparse.Namespace) -> int:
     report_path = csv_path = None
     if args.csv:
         csv_path = Path(args.csv)
-        csv_path.parent.mkdir(parents=True, exist_ok=True)
-        table.to_csv(csv_path, index=False)
+        _write_atomic({csv_path: table}, "--csv")
     if args.report:
         from .report import write_case_report
 
-        report_path = write_case_report(comparison, args.report)
+        try:
+            report_path = write_case_report(comparison, args.report)
+        except OSError as e:
+            raise RockbenchError(f"cannot write --report {args.report}: "
+                                 f"{e.strerror or e}") from None
     if args.json:
         data = {"scene": scene.name, "motion": comparison.motion, "phi0": comparison.phi0,
                 "table": table.to_dict(orient="records"),
@@ -483,8 +617,8 @@ def _print_constants(out: str | Path) -> None:
     shown = table.rename(columns={c: f"{c} [{u}]" if u else c for c, u in cols.items()})
     with _pandas_display():
         print(shown.to_string(index=False, na_rep="none", float_format=lambda v: f"{v:.5g}"))
-    Path(out).mkdir(parents=True, exist_ok=True)
-    table.to_csv(Path(out) / "constants.csv", index=False)
+    _output_folder(Path(out) / "constants.csv", "--out")
+    _write_atomic({Path(out) / "constants.csv": table}, "--out")
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -507,8 +641,18 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _choosing(name: str):
+    """``rockbench tradeoff | advise | stress`` (rockbench/cli_choosing.py), imported on use."""
+    def command(args: argparse.Namespace) -> int:
+        from . import cli_choosing
+
+        return getattr(cli_choosing, f"cmd_{name}")(args)
+    return command
+
+
 COMMANDS = {"scenes": cmd_scenes, "info": cmd_info, "run": cmd_run, "engines": cmd_engines,
-            "compare": cmd_compare, "report": cmd_report}
+            "compare": cmd_compare, "report": cmd_report, "tradeoff": _choosing("tradeoff"),
+            "advise": _choosing("advise"), "stress": _choosing("stress"), "map": cmd_map}
 
 
 # ==============================================================================================

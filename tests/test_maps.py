@@ -1,0 +1,122 @@
+"""Overturning maps (issue 11): every backend on a 10 x 10 map, resume after an interruption,
+a store written for other inputs, a real Dask cluster, agreement metrics."""
+
+from __future__ import annotations
+
+import math
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import rockbench as rb
+from rockbench.maps import MAP_COLUMNS, load_map, map_agreement, map_cells, run_map
+
+GRID = dict(grid=(10, 10), amplitude="1.5:8", frequency="4:10", pulses="symmetric+", tail=0.5)
+ENGINES = [e for e in rb.available_backends() if e != "analytic"]
+FAST = {"pymunk", "mujoco"}
+
+
+def test_cells_are_inclusive_and_complete():
+    cells = map_cells(grid="8x8", amplitude="1:8", frequency="1:8", pulses="all")
+    assert len(cells) == 8 * 8 * 4
+    assert sorted({c[2] for c in cells}) == [1, 2, 3, 4, 5, 6, 7, 8]
+    assert {(c[0], c[1]) for c in cells} == {("symmetric", 1), ("symmetric", -1),
+                                             ("antisymmetric", 1), ("antisymmetric", -1)}
+    with pytest.raises(rb.ParameterError, match="amplitude"):
+        map_cells(amplitude="8:1")
+    with pytest.raises(rb.ParameterError, match="pulses"):
+        map_cells(pulses="sideways")
+
+
+@pytest.fixture(scope="module")
+def analytic_map(tmp_path_factory):
+    store = tmp_path_factory.mktemp("maps") / "a.parquet"
+    return run_map("paper-asymmetric", store=store, progress=False, **GRID), store
+
+
+def test_analytic_map_columns_and_physics(analytic_map):
+    df, _ = analytic_map
+    assert list(df.columns) == list(MAP_COLUMNS) and len(df) == 100
+    assert (df["status"] == "ok").all()
+    ot = df["overturned"].astype(bool)
+    assert 0 < ot.sum() < len(df)                  # both regions present
+    # an overturned cell has exceeded its critical angle; larger A never survives at the
+    # smallest A that overturns... (per W, the largest A overturns if any does)
+    assert df.loc[ot, "exceeded_critical"].astype(bool).all()
+    for _, g in df.groupby("frequency"):
+        if g["overturned"].astype(bool).any():
+            assert bool(g.sort_values("amplitude")["overturned"].iloc[-1])
+
+
+def test_compiled_and_reference_maps_agree(analytic_map):
+    df, _ = analytic_map
+    ref = run_map("paper-asymmetric", method="solve_ivp", progress=False,
+                  grid=(4, 4), amplitude="1.5:8", frequency="4:10", pulses="symmetric+",
+                  tail=0.5)
+    fast = run_map("paper-asymmetric", method="compiled", progress=False,
+                   grid=(4, 4), amplitude="1.5:8", frequency="4:10", pulses="symmetric+",
+                   tail=0.5)
+    assert map_agreement(ref, fast)["fraction"] == 1.0
+    assert np.allclose(ref["max_abs_phi_over_alpha"], fast["max_abs_phi_over_alpha"],
+                       atol=1e-4)
+
+
+@pytest.mark.parametrize("engine", [pytest.param(e, marks=() if e in FAST else
+                                                 pytest.mark.slow) for e in ENGINES])
+def test_every_backend_maps_10x10(engine, analytic_map, tmp_path):
+    ref, _ = analytic_map
+    df = run_map("paper-asymmetric", engine, store=tmp_path / "e.parquet", progress=False,
+                 **GRID)
+    assert len(df) == 100 and set(df["status"]) <= {"ok", "diverged", "invalid"}
+    ag = map_agreement(ref, df)
+    assert ag["n"] >= 90 and ag["fraction"] >= 0.9, ag
+
+
+def test_interrupted_map_resumes_to_the_uninterrupted_one(analytic_map, tmp_path):
+    full, store = analytic_map
+    copy = tmp_path / "half.parquet"
+    shutil.copytree(store, copy)
+    parts = sorted(copy.glob("part-*.parquet"))
+    assert len(parts) >= 2
+    for p in parts[::2]:                             # an interrupted run wrote only some chunks
+        p.unlink()
+    kept = len(load_map(copy))
+    assert 0 < kept < 100
+    again = run_map("paper-asymmetric", store=copy, progress=False, **GRID)
+    assert again.attrs["reused"] == kept
+    pd.testing.assert_frame_equal(again.drop(columns="wall_s"), full.drop(columns="wall_s"))
+
+
+def test_a_store_for_other_inputs_is_refused(analytic_map):
+    _, store = analytic_map
+    with pytest.raises(rb.RockbenchError, match="other inputs"):
+        run_map("paper-symmetric", store=store, progress=False, **GRID)
+    with pytest.raises(rb.RockbenchError, match="other inputs"):
+        run_map("paper-asymmetric", "pymunk", store=store, progress=False, **GRID)
+
+
+def test_agreement_metrics_on_a_controlled_pair():
+    cells = map_cells(grid=(4, 2), amplitude="1:4", frequency="1:2", pulses="symmetric+")
+    a = pd.DataFrame([dict(amplitude=A, frequency=W, pulse=s, sign=g, overturned=A >= 3,
+                           exceeded_critical=A >= 3, max_abs_phi_over_alpha=1.0, n_impacts=1,
+                           fractured=False, status="ok", wall_s=0.0) for s, g, A, W in cells])
+    b = a.copy()
+    b["overturned"] = b["amplitude"] >= 2                 # b overturns earlier, by 1 in A
+    ag = map_agreement(a, b)
+    assert ag["n"] == 8 and ag["fraction"] == 0.75 and ag["b_overturns_a_survives"] == 2
+    assert list(ag["shift"]["shift"]) == [-1.0, -1.0]
+    assert math.isclose(ag["kappa"], 0.5)
+
+
+@pytest.mark.slow
+def test_map_on_a_real_dask_cluster(analytic_map):
+    distributed = pytest.importorskip("distributed")
+    full, _ = analytic_map
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  protocol="tcp", host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        df = run_map("paper-asymmetric", scheduler=cluster.scheduler_address, progress=False,
+                     **GRID)
+    pd.testing.assert_frame_equal(df.drop(columns="wall_s"), full.drop(columns="wall_s"))
