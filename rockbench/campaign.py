@@ -17,6 +17,10 @@ table):
    an engine's verdict differs from the analytic one.
 4. **Speed against accuracy** - one pulse case per engine at the time steps :data:`DT_SWEEP`:
    nrmse and peak error against the real-time factor.
+   **Fracture cases** - hybrid frames under the pulses of ``fracture_cases`` where the
+   analytic model fractures the tendons (one survives, two overturn): whether each engine
+   fractures when the analytic model does, and when (``fracture_agrees``,
+   ``t_fracture_error``).
 5. **Records** (only with ``records_dir``) - peak rotation per record for the free-standing and
    the hybrid (eps_f = 1 %) asymmetric frame, both polarities, as in the paper's Fig. 9 (via
    :func:`rockbench.sweep.run_cases`).
@@ -156,10 +160,32 @@ def _run_job(job: dict[str, Any]) -> dict[str, Any]:
     c = compare(scene, motion, engines=job["engines"], phi0=phi0, duration=job["duration"])
     traces = {k: Trace.from_result(r, max_points=job.get("max_points", 2500)).to_dict()
               for k, r in c.results.items()}
+    band, judged = _pulse_band(scene, motion, job, phi0, c.results)
     return {"job": job, "table": c.table, "eta": c.eta, "traces": traces,
+            "band": band, "band_judged": judged,
             "alpha": float(scene.alpha), "motion": c.motion, "phi0": phi0,
             "settings": {k: dict(v) for k, v in c.settings.items()},
             "elapsed_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
+
+
+def _pulse_band(scene, motion, job, phi0, results) -> tuple[dict | None, dict]:
+    """The analytic model's sensitivity band of a pulse or fracture case
+    (:func:`rockbench.sensitivity.band`) as a dict, and each ok backend's (inside, distance
+    [alpha]) against it; (None, {}) for free rocking or if the band cannot be computed."""
+    if job["kind"] not in ("pulse", "fracture") or motion is None:
+        return None, {}
+    from .sensitivity import band
+
+    try:
+        b = band(scene, motion, duration=job["duration"], phi0=phi0)
+    except Exception:  # noqa: BLE001 - no band is a missing column, not a failed case
+        return None, {}
+    judged = {}
+    for name, r in results.items():
+        if r.ok:
+            j = b.judge(r)
+            judged[name] = (bool(j.inside), float(j.distance))
+    return b.to_dict(), judged
 
 
 def _run_job_safe(job: dict[str, Any]) -> dict[str, Any]:
@@ -243,7 +269,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                  records_dir: str | os.PathLike | None = None, quick: bool = False,
                  progress: bool = True, store: str | os.PathLike | None = None,
                  executor: str = "process", dask_address: str | None = None,
-                 workers: int | None = None) -> Path:
+                 workers: int | None = None, full_maps: bool = False) -> Path:
     """Run the default campaign (module docstring) and write its report; return the path of
     ``out_dir/index.html``.
 
@@ -254,7 +280,10 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     engines : backend names (default: every available backend; the analytic reference always
         runs). Unavailable ones are listed on the page and skipped.
     records_dir : a folder of records (``.AT2`` files, or headerless files listed in a
-        ``records.csv`` with their dt): adds the peak rotation per record (paper Fig. 9).
+        ``records.csv`` with their dt): the peak rotation per record (paper Fig. 9), with the
+        analytic model's sensitivity band of each (``rockbench.sensitivity``). Default: the
+        records bundled in the package (``rockbench/records``, ``docs/records.md``), except
+        with ``quick``.
     quick : a few cases only (tests, a first look; well under a minute).
     progress : tqdm progress bars naming what runs.
     store : folder of the resumable store (default ``out_dir/store``); finished cases are
@@ -262,6 +291,9 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     executor : "process" (local process pool, one worker per core), "serial", or "dask"
         (``dask_address``: a running scheduler; none: a local cluster).
     workers : worker processes (default: one per available core).
+    full_maps : run every engine's overturning map at 12 x 12 x 4 on both map scenes
+        (:mod:`rockbench.campaign_maps`; the default report runs smaller engine grids to keep
+        ``make report`` within its budget); the maps are kept in ``store/maps`` and reused.
     """
     from .engines import available_backends
 
@@ -269,6 +301,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     check_options(executor, workers, dask_address)
     names = resolve_engines(engines) if engines is not None else available_backends()
     names = [REFERENCE] + [n for n in names if n != REFERENCE]
+    if records_dir is None and not quick:
+        records_dir = _bundled_dir()       # the public-domain records shipped in the package
     if records_dir is not None:
         find_records(records_dir)          # a bad folder fails now, not after the pulses
     avail = set(available_backends())
@@ -299,6 +333,11 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                              "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
                                         "A": float(A), "W": float(W)},
                              "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
+    for scene, shape, sign, A, W in plan["fracture_cases"]:
+        jobs.append({"kind": "fracture", "scene": scene, "engines": names,
+                     "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
+                                "A": float(A), "W": float(W)},
+                     "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
     for scene in plan["scenes"]:
         jobs.append({"kind": "free", "scene": scene, "engines": names, "motion": None,
                      "phi0_over_alpha": plan["free_phi0"], "duration": plan["free_duration"]})
@@ -338,6 +377,15 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         omap = T.with_verdicts(omap, ("A", "W"))
     timings["map"] = time.perf_counter() - t
 
+    # 3b: overturning maps at the paper's resolution (paper Figs. 4-7) ------------------------
+    t = time.perf_counter()
+    from .campaign_maps import ANALYTIC_GRID, ENGINE_AXES, run_maps
+
+    maps = run_maps(names, store_dir / "maps", full=full_maps, quick=quick, progress=progress,
+                    workers=workers,
+                    scheduler=dask_address if executor == "dask" else None)
+    timings["maps"] = time.perf_counter() - t
+
     # 5: records ----------------------------------------------------------------------------
     t = time.perf_counter()
     records = pd.DataFrame()
@@ -352,7 +400,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     engines_tab = T.engine_summary(metrics, eta_summary, speed, omap)
     files = {"metrics.csv": metrics, "eta.csv": eta, "eta_summary.csv": eta_summary,
              "engines.csv": engines_tab, "speed_accuracy.csv": speed,
-             "overturning_map.csv": omap}
+             "overturning_map.csv": omap, "map_agreement.csv": maps["agreement"]}
     if len(records):
         files["record_peaks.csv"] = records
     for name, df in files.items():
@@ -366,6 +414,17 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                                quick=quick, records_dir=records_dir, store_dir=store_dir,
                                fingerprint=fingerprint, engine_versions=_engine_versions(),
                                files=list(files))
+    from .report.maps_page import maps_html
+
+    at = next((i for i, sec in enumerate(sections) if sec[0] == "settings-section"),
+              len(sections))
+    g = ANALYTIC_GRID["grid"]
+    sections.insert(at, ("maps-section", "Overturning maps (paper Figs. 4-7)", maps_html(
+        maps, out / "figures",
+        analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {ANALYTIC_GRID['amplitude']}, "
+                      f"W in {ANALYTIC_GRID['frequency']}, pulse window + 10 s",
+        axes=f"A in {ENGINE_AXES['amplitude']}, W in {ENGINE_AXES['frequency']}, pulse window "
+             f"+ {ENGINE_AXES['tail']:g} s")))
     timings["report"] = time.perf_counter() - t
     total = time.perf_counter() - t_start
     cpu = sum(float(p.get("cpu_s", 0.0)) for p in payloads + dt_payloads)
@@ -377,21 +436,71 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     return path
 
 
+def _bundled_dir() -> Path:
+    """The folder of the records shipped in the package."""
+    from .scene.records import bundled_records
+
+    return Path(bundled_records()[0]["path"]).parent
+
+
+def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],
+                  meta: Mapping[str, dict[str, Any]]) -> pd.DataFrame:
+    """``rows`` (record peaks) with the analytic model's sensitivity band of each (record,
+    scene, polarity) and where each backend's peak stands against it (columns band_*,
+    within_band; :mod:`rockbench.sensitivity`). ``durations``: run length [s] per record path
+    (None: the default); ``meta``: dt and units per path of a headerless record."""
+    from .scene import load_scene
+    from .scene.motion import motion_from_spec
+    from .sensitivity import band
+
+    out = rows.copy()
+    for c in ("band_low", "band_nominal", "band_high", "band_verdict_agreement",
+              "band_distance"):
+        out[c] = math.nan
+    out["within_band"] = pd.array([None] * len(out), dtype="boolean")
+    for (path, scene, pol), g in out.groupby(["path", "scene", "polarity"], sort=False):
+        sc = load_scene(scene)
+        spec = {"kind": "record", "path": path, "scale": float(pol)}
+        spec.update(meta.get(path, {}))
+        try:
+            b = band(sc, motion_from_spec(spec, sc.structure),
+                     duration=durations.get(path))
+        except Exception:  # noqa: BLE001 - a band that cannot be computed stays NaN
+            continue
+        out.loc[g.index, ["band_low", "band_nominal", "band_high", "band_verdict_agreement"]] \
+            = [b.low, b.nominal, b.high, b.verdict_agreement]
+        for i in g.index:
+            if str(out.at[i, "status"]) != "ok":
+                continue
+            j = b.judge(float(out.at[i, "max_abs_phi_over_alpha"]),
+                        overturned=bool(out.at[i, "overturned"]))
+            out.at[i, "within_band"] = bool(j.inside)
+            out.at[i, "band_distance"] = j.distance
+    return out
+
+
 def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list[str], *,
              store: Path | None, **run: Any) -> pd.DataFrame:
-    """Part 5: every record on every frame of ``plan["record_frames"]``, both polarities."""
+    """Part 5: every record on every frame of ``plan["record_frames"]``, both polarities, with
+    the analytic model's sensitivity band of each."""
     recs, rnotes = find_records(records_dir)
     notes.extend(rnotes)
     if plan["max_records"]:
         recs = recs[: plan["max_records"]]
     frames = plan["record_frames"]
     rec_cases = []
+    durations: dict[Any, Any] = {}
     for rec in recs:
         rec_duration = None
-        if plan["record_tail"] is not None:
+        cap = plan.get("record_duration")
+        if plan["record_tail"] is not None or cap is not None:
             from .scene.records import load_record
             r = load_record(rec["path"], dt=rec["dt"], units=rec["units"])
-            rec_duration = float(r.t_end - r.t_start + plan["record_tail"])
+            tail = plan["record_tail"] if plan["record_tail"] is not None else 10.0
+            rec_duration = float(r.t_end - r.t_start + tail)
+            if cap is not None:
+                rec_duration = min(rec_duration, float(cap))
+        durations[rec["path"]] = rec_duration
         for frame, scene in frames.items():
             for pol in (1.0, -1.0):
                 m = {"kind": "record", "path": rec["path"], "scale": pol}
@@ -408,6 +517,9 @@ def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list
         rows["frame"] = [byscene.get(s, s) for s in rows["scene"]]
         rows["polarity"] = [int(round(float(v))) for v in rows["polarity"]]
         rows = T.with_verdicts(rows, ("record", "frame", "polarity"))
+        meta = {r["path"]: {"dt": r["dt"], "units": r["units"]} for r in recs
+                if r["dt"] is not None}
+        rows = _record_bands(rows, durations, meta)
         first = ["record", "frame", "scene", "polarity", "backend"]
         records = rows[first + [c for c in rows.columns if c not in first + ["path"]]]
     if not recs:

@@ -214,8 +214,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("report", help="run the default campaign and write the HTML report")
     p.add_argument("--out", default="reports", metavar="DIR", help="output folder (reports)")
-    p.add_argument("--records", metavar="DIR", help="run every record in this folder "
-                   "(default: the records bundled in the package; none with --quick)")
+    p.add_argument("--records", metavar="DIR", help="records folder (default: bundled ones)")
     p.add_argument("--engines", type=_names, metavar="A,B,...",
                    help="backends (default: every available one)")
     p.add_argument("--quick", action="store_true", help="a small campaign (minutes)")
@@ -224,6 +223,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run the cases on a dask.distributed scheduler at ADDRESS")
     p.add_argument("--store", metavar="PATH",
                    help="result store (Parquet or CSV); finished cases are skipped on a rerun")
+    p.add_argument("--full-maps", action="store_true",
+                   help="every engine's overturning map at 12x12x4 on both map scenes "
+                        "(long; reuses the store)")
     from .cli_choosing import add_choosing_commands
 
     add_choosing_commands(sub)
@@ -629,7 +631,8 @@ def cmd_report(args: argparse.Namespace) -> int:
         raise ParameterError("--records", args.records, "an existing folder of record files")
     if args.engines is not None:
         resolve_engines(args.engines, name="--engines")
-    kwargs: dict[str, Any] = {"engines": args.engines, "records_dir": args.records,
+    kwargs: dict[str, Any] = {"full_maps": args.full_maps,
+                              "engines": args.engines, "records_dir": args.records,
                               "quick": args.quick, "store": args.store}
     if args.dask is not None:
         kwargs.update(executor="dask", dask_address=args.dask)
