@@ -120,3 +120,23 @@ def test_map_on_a_real_dask_cluster(analytic_map):
         df = run_map("paper-asymmetric", scheduler=cluster.scheduler_address, progress=False,
                      **GRID)
     pd.testing.assert_frame_equal(df.drop(columns="wall_s"), full.drop(columns="wall_s"))
+
+
+def test_map_command_line(tmp_path, capsys):
+    import json
+
+    from rockbench.cli import main
+
+    store = tmp_path / "m.parquet"
+    args = ["map", "paper-asymmetric", "--grid", "3x2", "--amplitude", "2:6", "--frequency",
+            "2:4", "--pulses", "symmetric+,antisymmetric-", "--store", str(store), "--json"]
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["cells"] == 12 and out["reused"] == 0 and out["method"] == "compiled"
+    assert main(args) == 0
+    assert json.loads(capsys.readouterr().out)["reused"] == 12
+    assert main(["map", "paper-symmetric", "--store", str(store), "--grid", "2x2"]) == 2
+    assert "other inputs" in capsys.readouterr().err
+    assert main(["map", "--compare", str(store), str(store), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["kappa"] == 1.0
+    assert main(["map", "paper-asymmetric", "--grid", "0x4"]) == 2
