@@ -95,6 +95,30 @@ class Dynamics:
         (el, del_, dcl), (er, der, dcr) = out
         return DeviceState(el, er, del_, der, dcl, dcr)
 
+    def device_state_many(self, phi, angles=None) -> tuple:
+        """Vectorized over an array ``phi`` [rad] of this mechanism (frame only): tendon
+        elongations [m] (left, right) and damper chord rates dc/dphi [m/rad] (left, right), by
+        the formulas of :meth:`device_state`. ``angles``: :meth:`FrameMechanism.angles_many`
+        of ``phi`` if already computed."""
+        import numpy as np
+
+        phi = np.asarray(phi, dtype=float)
+        th_b, th_r, dth_b, dth_r = angles if angles is not None else \
+            self.mechanism.angles_many(phi)
+        b = self.structure.b
+
+        def opening(x, dx):
+            return 2.0 * b * np.sin(0.5 * np.abs(x)), b * np.cos(0.5 * np.abs(x)) * np.where(
+                x >= 0.0, 1.0, -1.0) * dx
+
+        out = []
+        for th, dth in ((phi, np.ones_like(phi)), (th_r, dth_r)):
+            eb, deb = opening(th, dth)
+            et, _ = opening(th - th_b, dth - dth_b)
+            out.append((eb + et, 2.0 * deb))
+        (el, dcl), (er, dcr) = out
+        return el, er, dcl, dcr
+
     def terms(self, phi: float, devices_intact: bool = True) -> Terms:
         """The coefficients of Eq. 17 at ``phi`` [rad]."""
         cfg = self.mechanism.configuration(phi)

@@ -222,6 +222,40 @@ class FrameMechanism:
         """Largest |phi| [rad] up to which the linkage can be assembled (its toggle), or pi."""
         return geometric_limit(self)
 
+    def angles_many(self, phi) -> tuple:
+        """Vectorized over an array ``phi`` [rad]: (theta_beam, theta_right) [rad] and their
+        derivatives with respect to phi [-], by the same closed forms as
+        :meth:`configuration` (tested against it)."""
+        import numpy as np
+
+        phi = np.asarray(phi, dtype=float)
+        Ax, Ay = self._A
+        Dx, Dy = self._D
+        L, r0, r1 = self._L, self._rho0, self._rho1
+        a = self._phiAB0 + phi
+        Bx, By = Ax + r0 * np.cos(a), Ay + r0 * np.sin(a)
+        ux, uy = Bx - Dx, By - Dy
+        d2 = ux * ux + uy * uy
+        d = np.sqrt(d2)
+        ap = (d2 + r1 * r1 - L * L) / (2.0 * d)
+        h2 = r1 * r1 - ap * ap
+        if np.any(h2 < 0.0):
+            raise ValueError("phi beyond the reach of the frame mechanism; see "
+                             "geometric_limit()")
+        hh = self._branch * np.sqrt(h2)
+        Cx = Dx + (ap * ux - hh * uy) / d
+        Cy = Dy + (ap * uy + hh * ux) / d
+        pbc = np.arctan2(Cy - By, Cx - Bx)
+        pcd = np.arctan2(Cy - Dy, Cx - Dx)
+        sab, cab = np.sin(a), np.cos(a)
+        m11, m12 = -L * np.sin(pbc), r1 * np.sin(pcd)
+        m21, m22 = L * np.cos(pbc), -r1 * np.cos(pcd)
+        det = m11 * m22 - m12 * m21
+        f1, f2 = r0 * sab, -r0 * cab
+        dbc = (f1 * m22 - m12 * f2) / det
+        dcd = (m11 * f2 - f1 * m21) / det
+        return pbc - self._phiBC0, pcd - self._phiCD0, dbc, dcd
+
 
 def geometric_limit(mech) -> float:
     """First |phi| [rad] in the mechanism's direction at which the mechanism ends, searched on
