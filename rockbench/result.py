@@ -108,21 +108,30 @@ class Summary:
 
 @dataclass
 class Cost:
-    """What a run cost. ``wall_s`` counts the integration or stepping only, not model building."""
+    """What a run cost. ``wall_s`` counts the integration or stepping only, not model building;
+    ``cpu_s`` the process CPU time of the whole run (building, stepping, measuring), which
+    another process's load does not inflate: rankings use it."""
 
     wall_s: float          # s
     sim_time: float        # s of simulated time
     steps: int             # integrator or engine steps
     rhs_calls: int = 0     # right-hand-side evaluations (analytic)
+    cpu_s: float = math.nan  # s, process CPU time of the whole run (building included)
 
     @property
     def real_time_factor(self) -> float:
         """Simulated seconds per wall second [-]."""
         return self.sim_time / self.wall_s if self.wall_s > 0 else math.inf
 
+    @property
+    def cpu_real_time_factor(self) -> float:
+        """Simulated seconds per CPU second of the whole run [-] (NaN if not measured)."""
+        return self.sim_time / self.cpu_s if self.cpu_s > 0 else math.nan
+
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["real_time_factor"] = self.real_time_factor
+        d["cpu_real_time_factor"] = self.cpu_real_time_factor
         return _jsonable(d)
 
 

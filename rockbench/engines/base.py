@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import abc
 import math
+import time
 from dataclasses import asdict, dataclass, fields
 from typing import Any, ClassVar
 
@@ -277,7 +278,10 @@ class EngineBackend(Backend):
         self.specs = body_specs(self.scene)
         self.foundation = foundation_spec(self.scene)
         self.poses0 = initial_poses(self.scene, phi0)
+        cpu = time.process_time()
         stepped = step_run(self, motion, t0, t_end, phi0)
-        return finish(self.scene, motion, self.settings, self.specs, stepped, phi0=phi0,
-                      t0=t0, backend_name=self.name, engine_version=self.version(),
-                      devices=device_geometry(self))
+        result = finish(self.scene, motion, self.settings, self.specs, stepped, phi0=phi0,
+                        t0=t0, backend_name=self.name, engine_version=self.version(),
+                        devices=device_geometry(self))
+        result.cost.cpu_s = time.process_time() - cpu
+        return result

@@ -459,6 +459,7 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
 
     from .base import run_window
 
+    cpu = time.process_time()
     backend = MujocoBackend(scene, settings, **overrides)
     cfg = backend.settings
     why = batch_refusal(scene, cfg)
@@ -506,6 +507,9 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
             v = np.concatenate((state0[None, 1 + nq:1 + nq + nv],
                                 state[j, :, 1 + nq:1 + nq + nv]))
             results[i] = _finish_batch(backend, motions[i], windows[i], q, v, wall, version)
+    share = (time.process_time() - cpu) / max(len(motions), 1)
+    for r in results:
+        r.cost.cpu_s = share          # the batch's process CPU time, shared equally
     return results
 
 

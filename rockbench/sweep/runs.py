@@ -21,7 +21,7 @@ __all__ = ["run_case", "run_cases", "TIMING_COLUMNS"]
 
 #: Row columns that depend on the machine and the moment, not on the physics (leave them out
 #: when comparing two sweeps).
-TIMING_COLUMNS = ("wall_s", "real_time_factor", "run_s", "finished_at")
+TIMING_COLUMNS = ("wall_s", "real_time_factor", "cpu_s", "run_s", "finished_at")
 
 
 def _now() -> str:
@@ -42,7 +42,8 @@ def _result_fields(result) -> dict[str, Any]:
         e = e[np.isfinite(e)]
         row[f"eta_{tag}_mean"] = float(e.mean()) if e.size else math.nan
     row.update(wall_s=float(c.wall_s), sim_time=float(c.sim_time), steps=int(c.steps),
-               rhs_calls=int(c.rhs_calls), real_time_factor=float(c.real_time_factor))
+               rhs_calls=int(c.rhs_calls), real_time_factor=float(c.real_time_factor),
+               cpu_s=float(c.cpu_s))
     version = result.settings.get("engine_version") if isinstance(result.settings, dict) else None
     if not version:
         from ..engines import get_backend
@@ -160,12 +161,12 @@ _RESULT_ORDER = ["status", "reason", "max_abs_phi", "max_abs_phi_over_alpha", "o
                  "t_overturn", "exceeded_critical", "uplifted", "t_uplift", "n_impacts",
                  "fractured", "t_fracture", "eta_ccw_mean", "eta_cw_mean", "max_penetration",
                  "max_sliding", "contact_opened", "wall_s", "sim_time", "steps", "rhs_calls",
-                 "real_time_factor", "engine_version", "run_s", "finished_at", "case"]
+                 "real_time_factor", "cpu_s", "engine_version", "run_s", "finished_at", "case"]
 _INT_COLS = ("n_impacts", "steps", "rhs_calls", "motion.sign")
 _BOOL_COLS = ("overturned", "exceeded_critical", "uplifted", "fractured", "contact_opened")
 _FLOAT_COLS = ("phi0", "duration", "max_abs_phi", "max_abs_phi_over_alpha", "t_overturn",
                "t_uplift", "t_fracture", "eta_ccw_mean", "eta_cw_mean", "max_penetration",
-               "max_sliding", "wall_s", "sim_time", "real_time_factor", "run_s")
+               "max_sliding", "wall_s", "sim_time", "real_time_factor", "cpu_s", "run_s")
 
 
 def _missing(v: Any) -> bool:
