@@ -87,3 +87,25 @@ def check_range(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = 
         rb = ")" if hi_open else "]"
         raise ParameterError(name, value, f"in {lb}{lo:g}, {hi:g}{rb}")
     return x
+
+
+def check_int(name: str, value: Any, lo: int, hi: int | None = None) -> int:
+    """Return ``value`` as int; raise unless it is an integral number in [lo, hi] (hi None:
+    no upper bound). Booleans are refused."""
+    ok = (not isinstance(value, bool) and isinstance(value, (int, float))
+          or type(value).__module__ == "numpy" and hasattr(value, "is_integer"))
+    try:
+        ok = ok and float(value).is_integer() and value >= lo and (hi is None or value <= hi)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ParameterError(name, value, f"an integer in [{lo}, {hi}]" if hi is not None
+                             else f"an integer >= {lo}")
+    return int(value)
+
+
+def check_choice(name: str, value: Any, choices) -> Any:
+    """Return ``value`` if it is one of ``choices``; raise naming the choices otherwise."""
+    if value not in tuple(choices):
+        raise ParameterError(name, value, f"one of {', '.join(map(str, choices))}")
+    return value

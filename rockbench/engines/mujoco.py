@@ -63,7 +63,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..constants import G
-from ..errors import ParameterError, check_finite, check_range
+from ..errors import ParameterError, check_choice, check_finite, check_int, check_range
 from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, PointForce
 from .loop import Diverged, SampleChecks, Stepped, device_geometry, finish
@@ -74,19 +74,6 @@ _INTEGRATORS = {"euler": "Euler", "implicitfast": "implicitfast", "implicit": "i
                 "rk4": "RK4"}
 _CONES = ("elliptic", "pyramidal")
 _DEVICE_MODES = ("native", "forces")
-
-
-def _check_int(name: str, value, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) \
-            or not float(value).is_integer() or value < lo:
-        raise ParameterError(name, value, f"an integer >= {lo}")
-    return int(value)
-
-
-def _check_choice(name: str, value, choices) -> str:
-    if value not in choices:
-        raise ParameterError(name, value, f"one of {', '.join(choices)}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -152,15 +139,15 @@ class MujocoSettings(EngineSettings):
                                      "a contact stiffer than the time step resolves diverges")
         check_range("contact_dampratio", self.contact_dampratio, 0.1, 10.0)
         check_range("impedance", self.impedance, 0.0, 1.0, lo_open=True, hi_open=True)
-        _check_choice("integrator", self.integrator, tuple(_INTEGRATORS))
-        _check_choice("cone", self.cone, _CONES)
+        check_choice("integrator", self.integrator, tuple(_INTEGRATORS))
+        check_choice("cone", self.cone, _CONES)
         check_range("impratio", self.impratio, 0.1, 100.0)
-        _check_int("noslip_iterations", self.noslip_iterations, 0)
-        _check_int("iterations", self.iterations, 1)
+        check_int("noslip_iterations", self.noslip_iterations, 0)
+        check_int("iterations", self.iterations, 1)
         if check_finite("tolerance", self.tolerance) < 0.0:
             raise ParameterError("tolerance", self.tolerance, ">= 0")
-        _check_choice("devices", self.devices, _DEVICE_MODES)
-        _check_choice("damper", self.damper, DAMPER_MODELS)
+        check_choice("devices", self.devices, _DEVICE_MODES)
+        check_choice("damper", self.damper, DAMPER_MODELS)
 
 
 def _f(x: float) -> str:
