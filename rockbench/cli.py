@@ -449,7 +449,12 @@ def cmd_engines(args: argparse.Namespace) -> int:
 
     rows = engine_info()
     for r in rows:
-        r["package"] = _package_version("scipy" if r["name"] == "analytic" else r["name"])
+        from .engines import get_backend
+        try:
+            dist = getattr(get_backend(r["name"]), "package", r["name"])
+        except RockbenchError:
+            dist = r["name"]
+        r["package"] = _package_version(dist)
     if args.json:
         _print_json(rows)
         return 0

@@ -19,6 +19,7 @@ class AnalyticBackend(Backend):
     """Event-driven integration of the paper's equation of motion (the reference)."""
 
     name: ClassVar[str] = "analytic"
+    package: ClassVar[str] = "scipy"
     Settings: ClassVar[type] = AnalyticSettings
 
     @classmethod

@@ -9,6 +9,8 @@ A backend is a subclass of :class:`Backend` registered by name in :mod:`rockbenc
   parameters, ...), every field with a default that ``docs/engines/<name>.md`` justifies by a
   measurement; invalid values raise :class:`rockbench.errors.ParameterError` in
   ``__post_init__``. A backend never changes the scene: engine-only parameters live here;
+* ``package`` - the distribution that provides the engine (class attribute; default the
+  registry name, e.g. "openseespy" for "opensees"), for ``rockbench engines``;
 * ``available()`` - classmethod returning ``(True, version)`` or ``(False, why)`` without
   raising when the engine package is missing;
 * ``run(motion=None, *, duration=None, phi0=0.0) -> Result`` - one simulation of the scene it
@@ -85,6 +87,10 @@ class Backend(abc.ABC):
 
     name: ClassVar[str]
     Settings: ClassVar[type]
+
+    @classmethod
+    def _package(cls) -> str:
+        return getattr(cls, "package", cls.name)
 
     def __init__(self, scene: Scene, settings: Any = None, **overrides: Any):
         if not isinstance(scene, Scene):

@@ -68,7 +68,8 @@ from typing import ClassVar
 import numpy as np
 
 from ..constants import G
-from ..errors import ParameterError, check_finite, check_positive, check_range
+from ..errors import (ParameterError, check_choice, check_finite, check_int, check_positive,
+                      check_range)
 from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, DeviceGeometry, PointForce, net_wrenches
 
@@ -87,21 +88,6 @@ SEAT = 1e-10
 _GRAVITY, _MOTION = 1, 2
 _FIRST_SAT, _FIRST_FIXED = 100, 100000
 _CONTACT0, _DASH0, _TENDON0, _DAMPER0 = 10000, 20000, 30000, 31000
-
-
-def _check_int(name: str, value, lo: int, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) \
-            or not math.isfinite(float(value)) or not float(value).is_integer() \
-            or value < lo or (hi is not None and value > hi):
-        raise ParameterError(name, value, f"an integer in [{lo}, {hi}]" if hi is not None
-                             else f"an integer >= {lo}")
-    return int(value)
-
-
-def _check_choice(name: str, value, choices) -> str:
-    if value not in choices:
-        raise ParameterError(name, value, f"one of {', '.join(choices)}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -163,22 +149,22 @@ class OpenseesSettings(EngineSettings):
     def __post_init__(self) -> None:
         super().__post_init__()
         check_range("toe_stiffness", self.toe_stiffness, 1e6, 1e15)
-        _check_int("springs", self.springs, 2, 101)
+        check_int("springs", self.springs, 2, 101)
         check_range("tangential_ratio", self.tangential_ratio, 1e-3, 1e3)
-        _check_choice("damping", self.damping, DAMPING_MODELS)
+        check_choice("damping", self.damping, DAMPING_MODELS)
         check_range("damping_ratio", self.damping_ratio, 0.0, 10.0)
-        _check_choice("integrator", self.integrator, INTEGRATORS)
+        check_choice("integrator", self.integrator, INTEGRATORS)
         g = check_range("gamma", self.gamma, 0.5, 2.0)
         b = check_finite("beta", self.beta)
         if not g / 2.0 - 1e-12 <= b <= 2.0:
             raise ParameterError("beta", self.beta, f"in [gamma / 2 = {g / 2.0:g}, 2]")
         check_range("hht_alpha", self.hht_alpha, 2.0 / 3.0, 1.0)
         check_range("member_ratio", self.member_ratio, 1.0, 1e6)
-        _check_int("iterations", self.iterations, 1)
+        check_int("iterations", self.iterations, 1)
         check_positive("tolerance", self.tolerance)
-        _check_int("halvings", self.halvings, 0, 10)
-        _check_choice("devices", self.devices, _DEVICE_MODES)
-        _check_choice("damper", self.damper, DAMPER_MODELS)
+        check_int("halvings", self.halvings, 0, 10)
+        check_choice("devices", self.devices, _DEVICE_MODES)
+        check_choice("damper", self.damper, DAMPER_MODELS)
 
 
 class NoConvergence(RuntimeError):
@@ -190,6 +176,7 @@ class OpenseesBackend(EngineBackend):
     Newmark / HHT integration (see the module docstring)."""
 
     name: ClassVar[str] = "opensees"
+    package: ClassVar[str] = "openseespy"
     Settings: ClassVar[type] = OpenseesSettings
 
     @property
