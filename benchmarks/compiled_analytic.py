@@ -12,7 +12,8 @@ Measures, in process CPU time (``time.process_time()``; medians of repeats with 
    s) with the compiled path on 1 process, on 2 processes (multiprocessing, one chunk each) and
    on 2 threads (``numba.prange``): wall time and CPU time (all processes / threads);
 3. the real-time factor (simulated s / CPU s of the whole call) of both paths on El Centro 1940
-   (``/work/shared/records/IV1940_ElCentro_180.AT2``) for paper-asymmetric and
+   (``rockbench/records/IV1940_ElCentro_180.AT2``, else ``/work/shared/records/``) for
+   paper-asymmetric and
    paper-asymmetric-hybrid-eps1.
 
 Writes ``compiled_analytic.md`` with the machine. The numba compilation (or cache load) is timed
@@ -39,7 +40,9 @@ from rockbench.analytic.solver import AnalyticSettings, simulate
 from rockbench.scene.motion import RickerPulse
 from rockbench.scene.scene import load_scene
 
-RECORD = Path("/work/shared/records/IV1940_ElCentro_180.AT2")
+_PACKAGED = (Path(__file__).resolve().parents[1] / "rockbench" / "records"
+             / "IV1940_ElCentro_180.AT2")
+RECORD = _PACKAGED if _PACKAGED.exists() else Path("/work/shared/records/IV1940_ElCentro_180.AT2")
 
 
 def _cpu_model() -> str:
@@ -62,6 +65,8 @@ def machine() -> dict:
             "python": sys.version.split()[0], "numpy": np.__version__,
             "scipy": scipy.__version__, "numba": numba.__version__,
             "llvmlite": llvmlite.__version__, "numba threading layer": _threading_layer(),
+            "load average (1, 5, 15 min) at the end":
+                ", ".join(f"{x:.1f}" for x in os.getloadavg()),
             "platform": platform.platform()}
 
 
@@ -226,7 +231,10 @@ def main(argv=None) -> int:
     for k, (walls, cpus) in res.items():
         lines.append(f"| {k} | {fmt(walls)} | {fmt(cpus)} | "
                      f"{1e3 * stats(cpus)[0] / len(cells):.3g} | {counts[k][0]} | {counts[k][1]} |")
-    lines.append("")
+    cpu2 = stats(res["2 processes"][1])[0]
+    lines += ["", f"On 2 idle cores the 2-process run would take about CPU / 2 = {cpu2 / 2:.1f} s "
+              "of wall time; a wall time far above that means the cores were shared (see the "
+              "load average above).", ""]
 
     # 3. records
     if RECORD.exists():

@@ -147,12 +147,15 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
                            scale=1.0 if args.scale is None else args.scale), 0.0
 
     if args.phi0 is not None:
-        fall = min(scene.fall_angles.values())
+        # the fall angle of the direction phi0 points to (they differ for an asymmetric frame)
+        sign = 1 if args.phi0 > 0 else -1
+        fall = scene.fall_angles[sign]
         limit = fall / scene.alpha
         if abs(args.phi0) >= limit:
+            way = "counterclockwise" if sign == 1 else "clockwise"
             raise ParameterError("--phi0", args.phi0,
-                                 f"0 < |phi0| < {limit:.4g} (multiples of alpha; fall angle "
-                                 f"{fall:.4g} rad)")
+                                 f"0 < |phi0| < {limit:.4g} for {way} rocking (multiples of "
+                                 f"alpha; {way} fall angle {fall:.4g} rad)")
         return None, args.phi0 * scene.alpha
 
     raise MissingOption("a ground motion", "--pulse, --record, or --phi0 for free rocking",

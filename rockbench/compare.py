@@ -142,6 +142,10 @@ METRIC_COLUMNS: dict[str, str] = {
     "overturned_ref": "-, the reference run overturned",
     "verdict_agrees": "-, overturned == overturned_ref",
     "t_overturn_error": "s, t_overturn - t_overturn_ref (NaN unless both overturn)",
+    "fractured": "-, the backend's devices fractured (a tendon reached the fracture strain)",
+    "fractured_ref": "-, the reference's devices fractured",
+    "fracture_agrees": "-, fractured == fractured_ref",
+    "t_fracture_error": "s, t_fracture - t_fracture_ref (NaN unless both fracture)",
     "energy_gained_at_impact": "-, an impact gained kinetic energy: a measured eta >= 1, or "
                                "eta^2 I_after(0) / I_before(0) > 1 (I: the mechanism's inertia "
                                "at phi = 0 for the direction before and after)",
@@ -172,8 +176,8 @@ DERIVED_COLUMNS: dict[str, str] = {
                           "(mean effective eta against the analytic eta)",
 }
 
-_BOOL_COLUMNS = ("overturned", "overturned_ref", "verdict_agrees", "energy_gained_at_impact",
-                 "contact_opened")
+_BOOL_COLUMNS = ("overturned", "overturned_ref", "verdict_agrees", "fractured", "fractured_ref",
+                 "fracture_agrees", "energy_gained_at_impact", "contact_opened")
 _INT_COLUMNS = ("n_impacts", "n_impacts_ref", "steps")
 _STR_COLUMNS = ("backend", "engine_version", "status", "reason")
 
@@ -308,6 +312,7 @@ def _empty_row(backend: str, reference: Result | None) -> dict[str, Any]:
         if reference.ok:
             row["n_impacts_ref"] = int(reference.summary.n_impacts)
             row["overturned_ref"] = bool(reference.summary.overturned)
+            row["fractured_ref"] = bool(reference.summary.fractured)
     return row
 
 
@@ -358,6 +363,10 @@ def metrics(result: Result, reference: Result) -> dict[str, Any]:
     row["verdict_agrees"] = bool(s.overturned) == bool(sr.overturned)
     row["t_overturn_error"] = (_num(s.t_overturn) - _num(sr.t_overturn)
                                if s.overturned and sr.overturned else math.nan)
+    row["fractured"] = bool(s.fractured)
+    row["fracture_agrees"] = bool(s.fractured) == bool(sr.fractured)
+    row["t_fracture_error"] = (_num(s.t_fracture) - _num(sr.t_fracture)
+                               if s.fractured and sr.fractured else math.nan)
     row["energy_gained_at_impact"] = _energy_gained(result)
     row["max_penetration"] = _num(s.max_penetration)
     row["max_sliding"] = _num(s.max_sliding)

@@ -16,7 +16,7 @@ from typing import Any
 
 from .engines import REGISTRY, available_backends, get_backend
 from .engines.base import run_window
-from .errors import BackendUnavailable, ParameterError
+from .errors import BackendUnavailable, ParameterError, check_finite, check_positive
 from .result import Result
 from .scene.scene import Scene
 
@@ -52,6 +52,9 @@ def run(scene: Scene, motion=None, *, engine: str = "analytic",
     backend = get_backend(engine)(scene, settings, **setting_overrides)
     # the run's size (samples, steps) is checked before the backend allocates anything
     run_window(scene, motion, duration, phi0, settings=backend.settings)
+    # backends get plain floats (run_window accepted what float() converts, e.g. "0.1")
+    phi0 = check_finite("phi0", phi0)
+    duration = None if duration is None else check_positive("duration", duration)
     return backend.run(motion, duration=duration, phi0=phi0)
 
 

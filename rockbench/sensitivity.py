@@ -209,12 +209,25 @@ class Band:
         """(high - low) / nominal [-] (NaN if the unperturbed run never uplifts)."""
         return self.width / self.nominal if self.nominal > 0 else math.nan
 
-    def judge(self, peak: float | Result) -> Judgement:
+    def judge(self, peak: float | Result, overturned: bool | None = None) -> Judgement:
         """Place ``peak`` (max|phi| / alpha, or a Result: max|phi| of its history / alpha of
-        this band) against the band."""
+        this band) against the band.
+
+        A run that overturned (a Result's summary says so, or ``overturned=True`` with a
+        number) is judged by its verdict, not its peak (which is then the fall angle plus what
+        the engine's last step overshoots): inside if some run of the band overturns too;
+        otherwise by its peak, like any other."""
         if isinstance(peak, Result):
             phi = peak.history["phi"].to_numpy(dtype=float)
+            overturned = bool(peak.summary.overturned)
             peak = float(np.max(np.abs(phi))) / self.alpha if phi.size else math.nan
+        if overturned and math.isfinite(float(peak)):
+            ok = self.runs[self.runs["status"] == "ok"]
+            n_over = int(ok["overturned"].astype(bool).sum())
+            if n_over:
+                return Judgement(float(peak), True, 0.0, 0.0, "within the model's own "
+                                 f"sensitivity (overturned, as {n_over} of {len(ok)} analytic "
+                                 "runs do)")
         x = float(peak)
         if not math.isfinite(x):
             return Judgement(x, False, math.nan, math.nan, "no peak to judge")

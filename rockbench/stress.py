@@ -169,7 +169,7 @@ def _load(pt: StressPoint):
     """(scene, motion, duration) of a point; raises for an invalid scene."""
     from .scene.motion import motion_from_spec
     from .scene.scene import load_scene
-    from .tradeoff import _free_duration
+    from .validation import _free_duration
 
     scene = load_scene(pt.scene, dict(pt.overrides) or None)
     fall = min(4.0 * scene.alpha, min(scene.fall_angles.values()))

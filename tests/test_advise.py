@@ -95,3 +95,37 @@ def test_advise_on_a_user_scene_file(tmp_path):
     b = A.advise(str(f), 0.05, engines=["pymunk"], quick=True, executor="serial",
                  store=store, dts=[4e-3, 2e-3])
     assert b.ranking == a.ranking
+
+
+def test_cli_advise_on_a_user_scene_file(tmp_path, capsys):
+    """`rockbench advise FILE --tolerance 0.05 --quick --json` on a user's scene file: JSON
+    naming the engine considered and its cheapest passing setting."""
+    from rockbench.cli import main
+
+    f = tmp_path / "my-block.toml"
+    f.write_text('name = "my-block"\n[structure]\ntype = "block"\nwidth = 1.0\nheight = 4.0\n')
+    code = main(["advise", str(f), "--tolerance", "0.05", "--engines", "pymunk", "--quick",
+                 "--json", "--workers", "1"])
+    assert code == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["scene"] == "my-block" and j["considered"] == ["pymunk"]
+    assert j["recommended"]["engine"] == "pymunk" and j["recommended"]["worst_error"] <= 0.05
+
+
+def test_cli_advise_rejects_a_bad_tolerance(capsys):
+    from rockbench.cli import main
+
+    assert main(["advise", "housner-block", "--tolerance", "2"]) == 2
+    assert "tolerance" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_advise_paper_asymmetric_quick(capsys):
+    """The command of the issue, quick form, every engine: JSON names every engine."""
+    from rockbench.cli import main
+    from rockbench.engines import REGISTRY
+
+    assert main(["advise", "paper-asymmetric", "--tolerance", "0.02", "--json", "--quick"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert set(j["considered"]) == set(REGISTRY) - {"analytic"}
+    assert {r["engine"] for r in j["ranking"]} == set(j["considered"])

@@ -241,3 +241,34 @@ def test_every_column_is_documented():
     for col, text in {**METRIC_COLUMNS, **ETA_COLUMNS}.items():
         unit = text.split(",")[0]
         assert unit in ("-", "s", "m"), f"{col}: unit {unit!r}"
+
+
+# --- fracture (issue 14) -------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def fracture_run():
+    """The eps_f = 1 % hybrid frame under an antisymmetric pulse 1.27 x its overturning
+    threshold (A = 8, W = 2): the tendons fracture, then the frame overturns."""
+    sc = rb.load_scene("paper-asymmetric-hybrid-eps1")
+    m = rb.RickerPulse.dimensionless(A=8.0, W=2.0, structure=sc.structure,
+                                     shape="antisymmetric", sign=1)
+    return rb.run(sc, m)
+
+
+def test_fracture_metrics(fracture_run, ref):
+    r = fracture_run
+    assert r.summary.fractured and r.summary.overturned
+    assert r.summary.t_fracture < r.summary.t_overturn
+    row = metrics(r, r)
+    assert row["fractured"] and row["fractured_ref"] and row["fracture_agrees"]
+    assert row["t_fracture_error"] == 0.0
+    late = replace(r, backend="fake", summary=replace(r.summary,
+                                                      t_fracture=r.summary.t_fracture + 0.01))
+    assert metrics(late, r)["t_fracture_error"] == pytest.approx(0.01, abs=1e-12)
+    intact = replace(r, backend="fake", summary=replace(r.summary, fractured=False,
+                                                        t_fracture=None))
+    row = metrics(intact, r)
+    assert row["fractured"] is False and row["fractured_ref"] is True
+    assert row["fracture_agrees"] is False and math.isnan(row["t_fracture_error"])
+    # a scene without devices never fractures: the metrics say so, and agree
+    row = metrics(ref, ref)
+    assert row["fractured"] is False and row["fracture_agrees"] is True

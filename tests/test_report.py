@@ -365,3 +365,76 @@ def test_campaign_bad_input(tmp_path):
     with pytest.raises(rb.ParameterError, match="records_dir"):
         run_campaign(tmp_path, engines=["analytic"], quick=True, progress=False,
                      records_dir=tmp_path / "missing", executor="serial")
+
+
+# ------------------------------------------------------------------------------------------
+# fracture cases (issue 14)
+def test_plan_fracture_cases_fracture_in_the_analytic_model():
+    """The campaign's fracture cases do what cases.toml says: the analytic model fractures the
+    tendons in each; the first survives, the others overturn."""
+    from rockbench.campaign import _pulse_duration
+    from rockbench.sweep.cases import campaign_plan
+
+    cases = campaign_plan()["fracture_cases"]
+    assert len(cases) == 3 and campaign_plan(quick=True)["fracture_cases"] == ()
+    for k, (scene, shape, sign, A, W) in enumerate(cases):
+        sc = rb.load_scene(scene)
+        m = rb.RickerPulse.dimensionless(A=A, W=W, structure=sc.structure, shape=shape,
+                                         sign=sign)
+        s = rb.run(sc, m, duration=_pulse_duration(scene, A, W, shape, 6.0),
+                   history="minimal").summary
+        assert s.fractured, (scene, A, W)
+        assert s.overturned == (k > 0), (scene, A, W)
+        if s.overturned:
+            assert s.t_fracture < s.t_overturn
+
+
+def test_fracture_section_says_per_engine_whether_and_when():
+    from rockbench.report.campaign_page import fracture_html
+
+    rows = []
+    for case, terr in (("eps1 A=29", 0.0015), ("eps1 A=8", -0.0004)):
+        rows.append(dict(case=case, backend="analytic", status="ok", reason="", fractured=True,
+                         fractured_ref=True, fracture_agrees=True, t_fracture_error=0.0))
+        rows.append(dict(case=case, backend="eng", status="ok", reason="", fractured=True,
+                         fractured_ref=True, fracture_agrees=True, t_fracture_error=terr))
+    rows.append(dict(case="eps2 A=9", backend="eng", status="ok", reason="", fractured=False,
+                     fractured_ref=True, fracture_agrees=False, t_fracture_error=math.nan))
+    rows.append(dict(case="eps2 A=51", backend="eng", status="diverged",
+                     reason="sliding 0.2 m > max_sliding", fractured=None, fractured_ref=True,
+                     fracture_agrees=None, t_fracture_error=math.nan))
+    df = pd.DataFrame(rows)
+    df["fracture_agrees"] = df["fracture_agrees"].astype("boolean")
+    html = fracture_html(df, METRIC_COLUMNS)
+    assert "<b>eng</b>: fractures when the analytic model does in 2 of 3 cases that ran" in html
+    assert "at most 1.5 ms" in html and "1 not ok: sliding 0.2 m" in html
+    assert 'id="fracture"' in html and "analytic" in html
+
+
+def test_quick_campaign_record_bands(quick):
+    """Every record case carries the analytic model's sensitivity band; the analytic run itself
+    lies in it (it is the band's unperturbed run), and the page says how many engine peaks do."""
+    d = quick[0].parent
+    rp = pd.read_csv(d / "record_peaks.csv")
+    assert rp["band_low"].notna().all() and rp["band_high"].notna().all()
+    assert (rp["band_low"] <= rp["band_nominal"]).all()
+    assert (rp["band_nominal"] <= rp["band_high"]).all()
+    ana = rp[rp["backend"] == "analytic"]
+    assert np.allclose(ana["max_abs_phi_over_alpha"], ana["band_nominal"], rtol=1e-6)
+    assert ana["within_band"].astype(bool).all()
+    assert "record peaks within the model's own sensitivity" in quick[1]
+    # the pulse cases carry their band too (free rocking: none)
+    m = pd.read_csv(d / "metrics.csv")
+    pulses = m[m["part"] == "pulse"]
+    assert pulses["band_low"].notna().all() and (pulses["band_low"] <= pulses["band_high"]).all()
+    assert m.loc[m["part"] == "free", "band_low"].isna().all()
+    ana = pulses[pulses["backend"] == "analytic"]
+    assert ana["within_band"].astype(bool).all() and (ana["band_distance"] == 0).all()
+    assert "pulse-case peaks within the model's own sensitivity" in quick[1]
+
+
+def test_default_records_are_the_bundled_ones():
+    from rockbench.campaign import _bundled_dir
+
+    names = sorted(p.name for p in _bundled_dir().glob("*.AT2"))
+    assert names == ["IV1940_ElCentro_180.AT2", "IV1979_ElCentroArray4_230.AT2"]

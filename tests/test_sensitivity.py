@@ -134,3 +134,21 @@ def test_record_band_has_a_phase_run_and_bad_inputs_are_named(scene):
         band("not a scene", rec)
     with pytest.raises(rb.ParameterError):
         perturbed_case(block, None, Perturbation("scale", 1.01))
+
+
+def test_an_overturned_engine_is_judged_by_its_verdict():
+    """Overturning: the peak is the fall angle plus an engine's last-step overshoot, so an
+    overturned run is inside when the band's analytic runs overturn too (the fracture-and-
+    overturn case of issue 14: eps_f = 1 %, antisymmetric pulse A = 8, W = 2)."""
+    scene = rb.load_scene("paper-asymmetric-hybrid-eps1")
+    m = rb.RickerPulse.dimensionless(A=8.0, W=2.0, structure=scene.structure,
+                                     shape="antisymmetric", sign=1)
+    b = band(scene, m, perturbations=(Perturbation("scale", 0.99),))
+    assert b.overturned and b.fractured and b.verdict_agreement == 1.0
+    r = rb.run(scene, m)
+    h = r.history.copy()
+    h["phi"] = 1.001 * h["phi"]                 # overshoots the band's (fall-angle) peaks
+    over = dataclasses.replace(r, backend="fake", history=h)
+    assert not b.judge(float(np.max(np.abs(h["phi"]))) / b.alpha).inside
+    j = b.judge(over)
+    assert j.inside and "overturned" in j.text

@@ -254,3 +254,28 @@ def test_plugin_import_is_cheap():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+# --- assert_agree with the analytic model's sensitivity band (issue 14) ----------------------
+def test_band_option_judges_the_peak_against_the_models_own_sensitivity(ref):
+    from rockbench.sensitivity import band
+
+    b = band(BLOCK, PULSE, duration=6.0)
+    assert b.high > b.nominal
+    assert_agree(ref, ref, band=b)
+    # a peak inside the band passes even under a tolerance it would fail without the band
+    f = 1.0 + 0.5 * (b.high / b.nominal - 1.0)
+    inside = _phi(ref, f * ref.history["phi"].to_numpy())
+    with pytest.raises(AssertionError):
+        assert_agree(inside, ref, peak_rtol=1e-6, nrmse=None, eta_rtol=None)
+    assert_agree(inside, ref, peak_rtol=1e-6, nrmse=None, eta_rtol=None, band=b)
+    # a deliberately wrong result (history x 1.3) falls outside, and the message says by how much
+    wrong = _phi(ref, 1.3 * ref.history["phi"].to_numpy())
+    with pytest.raises(AssertionError) as e:
+        assert_agree(wrong, ref, nrmse=None, eta_rtol=None, band=b)
+    msg = str(e.value)
+    assert "sensitivity band" in msg and "outside it, by" in msg
+    with pytest.raises(rb.ParameterError, match="band"):
+        assert_agree(ref, ref, band="not a band")
+    with pytest.raises(rb.ParameterError, match="band"):
+        assert_agree(ref, ref, band=replace(b, scene="another"))

@@ -117,3 +117,19 @@ def test_work_precision_figure():
     assert axes[0].get_xscale() == "log" and axes[0].get_yscale() == "log"
     labels = axes[0].get_legend_handles_labels()[1]
     assert {"a", "b", "Pareto front"} <= set(labels)
+
+
+def test_cli_tradeoff_writes_table_and_figure(tmp_path, capsys):
+    import json
+
+    from rockbench.cli import main
+
+    f = tmp_path / "blk.toml"
+    f.write_text('name = "blk"\n[structure]\ntype = "block"\nwidth = 1.0\nheight = 4.0\n')
+    out = tmp_path / "out"
+    code = main(["tradeoff", str(f), "--engines", "pymunk", "--dt", "4e-3", "--repeat", "1",
+                 "--quick", "--workers", "1", "--out", str(out), "--json"])
+    assert code == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["table"][0]["engine"] == "pymunk" and j["table"][0]["cpu_per_sim_s"] > 0
+    assert (out / "tradeoff.csv").is_file() and (out / "work_precision.png").is_file()

@@ -25,11 +25,17 @@ Event rules mirrored from :mod:`rockbench.analytic.rules` and :mod:`rockbench.an
 u_g'' < lambda_cw g (1 + UPLIFT_RTOL) (direction -1), found on the motion's knots (pulses:
 T_g/400 and the extrema, then Brent to 1e-13 s; records: exact crossing of the linear
 interpolation), stepped just past the root; impact at phi = 0 with eta of the post-impact
-direction, rest when |phi'+| <= rest_ratio p alpha (or eta <= 0); fracture (all devices removed)
-at the fracture angle of the direction; overturn at the scene's fall angle (terminal); critical
-angle exceedance (also when a segment starts at or beyond the critical angle of its potential);
-peaks at phi' = 0; at rest, the run ends at max(t, motion end) once the motion cannot uplift the
-structure any more before the end of the run.
+direction, rest when |phi'+| <= rest_ratio p alpha (or eta <= 0), chatter (two successive
+post-impact |phi'| <= CHATTER_VELOCITY_RATIO p alpha at most CHATTER_INTERVAL / p apart settle
+the structure); fracture (all devices removed) at the fracture angle of the direction; overturn
+at the scene's fall angle (terminal); critical angle exceedance (also, with a "critical" event,
+when a segment starts at or beyond the critical angle of its potential); peaks at phi' = 0
+(impact and peak event functions are taken as positive at a segment's first instant); at rest,
+the run ends at max(t, motion end) once the motion cannot uplift the structure any more before
+the end of the run; the progress guarantee (PROGRESS_WINDOW iterations must advance time by
+PROGRESS_MIN_ADVANCE / p, at most MAX_EVENT_ITERATIONS iterations; an integrator failure) ends
+the run as ``status == "invalid"`` with the reason, never with an exception. The constants are
+read from :mod:`rockbench.analytic.rules` when a run starts, as the reference does.
 
 If numba cannot be imported, :data:`NUMBA_AVAILABLE` is False, :data:`NUMBA_ERROR` says why,
 and every entry point raises :class:`rockbench.errors.BackendUnavailable` so that callers can
@@ -282,7 +288,8 @@ def _phidd(phi, pd, ag, g, intact, kin):
     for i in range(nb):
         m = g[20 + i]
         Ic = g[23 + i]
-        dx, dy, ddx, ddy, dth, ddth = kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3], kin[i, 5], kin[i, 6]
+        dx, dy, ddx, ddy = kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3]
+        dth, ddth = kin[i, 5], kin[i, 6]
         In += m * (dx * dx + dy * dy) + Ic * dth * dth
         J += m * (dx * ddx + dy * ddy) + Ic * dth * ddth
         Gm += m * dy
@@ -835,8 +842,9 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
                     else:
                         mul = float(s)
                         shift = fall if e == 1 else (frac if e == 2 else crit)
-                    roots[q] = _brent_core(t_old, t_new, g_old[e], g_new[e], 4 * 2.220446049250313e-16,
-                                           4 * 2.220446049250313e-16, 1, mk, mp, rt, ra, hint, F,
+                    # solve_ivp: brentq on the dense output, xtol = rtol = 4 machine epsilons
+                    roots[q] = _brent_core(t_old, t_new, g_old[e], g_new[e], 8.881784197001252e-16,
+                                           8.881784197001252e-16, 1, mk, mp, rt, ra, hint, F,
                                            t_old, h, yold, comp, shift, mul)
                 # sort active events by root time (insertion sort, stable)
                 for q in range(1, nact):
@@ -1117,14 +1125,18 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
 
     Same signature, arguments and :class:`rockbench.result.Result` schema as
     :func:`rockbench.analytic.solver.simulate` (see its docstring; ``settings`` is an
-    ``AnalyticSettings``: rtol, atol, output_dt, rest_ratio and history are honoured; the
-    integrator is always the compiled DOP853). ``motion`` may be a RickerPulse, a Record or None
-    (free rocking). ``cost.wall_s`` counts the compiled integration only; ``cost.steps`` counts
-    accepted steps and ``cost.rhs_calls`` evaluations of phi''.
+    ``AnalyticSettings``: rtol, atol, output_dt, rest_ratio and history are honoured; method must
+    be "DOP853" (the scheme compiled here) or "compiled"). ``motion`` may be a RickerPulse, a
+    Record or None (free rocking). ``cost.wall_s`` counts the compiled integration only;
+    ``cost.steps`` counts accepted steps and ``cost.rhs_calls`` evaluations of phi''.
     """
     _require_numba()
     from .solver import AnalyticSettings
     settings = settings or AnalyticSettings()
+    if settings.method not in ("DOP853", "compiled"):
+        raise ParameterError("settings.method", settings.method,
+                             "'DOP853' or 'compiled' (the compiled path integrates DOP853 only; "
+                             "use rockbench.analytic.solver.simulate for other methods)")
     ref = reference if reference is not None and reference.scene == scene else reference_of(scene)
     geo, sc = scene_arrays(scene)
     mk, mp, rt, ra, ext, suf, rsuf = _motion_arrays(motion)
@@ -1157,7 +1169,8 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
         w0 = time.perf_counter()
         _run(geo, sc, mk, mp, rt, ra, ext, suf, rsuf, t0, t_end, phi0, phidot0,
              float(settings.rtol), float(settings.atol), v_rest, thr_p, thr_n, m_end,
-             rp[0], rp[1], rp[2], int(rp[3]), int(rp[4]), _A, _B, _C, _E3, _E5, _D, _NS, True, evf, evi, True, tg_full, hist, hmode, out)
+             rp[0], rp[1], rp[2], int(rp[3]), int(rp[4]), _A, _B, _C, _E3, _E5, _D, _NS,
+             True, evf, evi, True, tg_full, hist, hmode, out)
         wall = time.perf_counter() - w0
         if int(out[_O_STATUS]) == 3:
             cap = int(out[_O_NEV]) + 16

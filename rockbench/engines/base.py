@@ -88,10 +88,6 @@ class Backend(abc.ABC):
     name: ClassVar[str]
     Settings: ClassVar[type]
 
-    @classmethod
-    def _package(cls) -> str:
-        return getattr(cls, "package", cls.name)
-
     def __init__(self, scene: Scene, settings: Any = None, **overrides: Any):
         if not isinstance(scene, Scene):
             raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from html import escape
 
 import pandas as pd
 
@@ -14,7 +15,7 @@ from . import figures as F
 from . import html as H
 from .tables import CAMPAIGN_COLUMNS
 
-__all__ = ["page_sections", "runtime_html", "render"]
+__all__ = ["page_sections", "runtime_html", "render", "fracture_html", "band_summary_html"]
 
 
 def render(sections, *, quick: bool, with_records: bool) -> str:
@@ -36,6 +37,55 @@ def runtime_html(timings: Mapping[str, float], total: float, workers: int,
     return (H._dl(items) + "<p>Wall-clock seconds of this run of the campaign (cases reused "
             "from the store cost nothing here); CPU time summed over the comparison and "
             "time-step cases, reused ones included.</p>")
+
+
+def band_summary_html(records, what: str = "record peaks") -> str:
+    """Per engine: how many of its peaks (``what``) lie within the analytic model's
+    sensitivity band, and how far the others are (columns within_band, band_distance of
+    record_peaks.csv or metrics.csv)."""
+    if not len(records) or "within_band" not in records:
+        return ""
+    items = []
+    eng = records[(records["backend"] != "analytic") & (records["status"] == "ok")]
+    for name, g in eng.groupby("backend", sort=False):
+        w = g["within_band"].dropna()
+        if not len(w):
+            continue
+        inside = int(w.astype(bool).sum())
+        out = g.loc[w.index[~w.astype(bool).to_numpy()], "band_distance"].abs()
+        far = f"; outside by at most {out.max():.3g} alpha" if len(out) else ""
+        items.append(f"<li><b>{escape(str(name))}</b>: {inside} of {len(w)} {what} "
+                     f"within the model's own sensitivity{far}.</li>")
+    return (f"<p>Each engine's {what} against the analytic model's sensitivity band:</p>"
+            "<ul>" + "".join(items) + "</ul>") if items else ""
+
+
+def fracture_html(frac, units) -> str:
+    """The Fracture section: per engine, whether it fractures when the analytic model does and
+    when, then the cases' table (rows of ``metrics`` with part "fracture")."""
+    cols = ["case", "backend", "status", "fractured", "fractured_ref", "fracture_agrees",
+            "t_fracture_error", "overturned", "overturned_ref", "verdict_agrees",
+            "t_overturn_error", "max_abs_phi_over_alpha", "peak_rel_error", "max_sliding"]
+    items = []
+    eng = frac[frac["backend"] != "analytic"]
+    for name, g in eng.groupby("backend", sort=False):
+        ok = g[g["status"] == "ok"]
+        agree = int(ok["fracture_agrees"].fillna(False).astype(bool).sum())
+        terr = ok["t_fracture_error"].to_numpy(dtype=float)
+        terr = terr[terr == terr]
+        when = (f"; fracture time off by at most {1e3 * abs(terr).max():.3g} ms"
+                if terr.size else "")
+        bad = len(g) - len(ok)
+        reasons = "; ".join(g.loc[g["status"] != "ok", "reason"].astype(str))
+        items.append(f"<li><b>{escape(name)}</b>: fractures when the analytic model does in "
+                     f"{agree} of {len(ok)} cases that ran{when}"
+                     + (f" ({bad} not ok: {escape(reasons)})" if bad else "") + ".</li>")
+    intro = ("<p>Hybrid frames under pulses where the analytic model fractures the tendons "
+             "(eps_f = 1 % and 2 %; chosen from the analytic map, see "
+             "<code>rockbench/scenarios/cases.toml</code>): does each engine fracture when the "
+             "analytic model does, and when?</p>")
+    return (intro + "<ul>" + "".join(items) + "</ul>"
+            + H.html_table(frac, cols, units=units, table_id="fracture", scroll=True))
 
 
 def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, engines_tab,
@@ -88,12 +138,17 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             continue
         panels = [(p["label"].replace(scene + " ", ""),
                    {k: F.as_trace(v) for k, v in p["traces"].items()}) for p in ps]
+        bands = [(p["band"]["low"], p["band"]["high"]) if p.get("band") else None
+                 for p in ps]
         fig = F.plot_history_grid(panels, alpha=ps[0]["alpha"], ncols=min(4, len(panels)),
-                                  title=f"{scene}: rotation histories under Ricker pulses")
+                                  title=f"{scene}: rotation histories under Ricker pulses",
+                                  bands=bands)
         hist.append(H.figure_html(
             fig, f"{scene}: phi / alpha [-] against t [s] for every pulse case (analytic "
                  f"reference bold black; impacts marked), alpha = {ps[0]['alpha']:.4f} rad. "
-                 f"Panel titles: pulse shape and sign, A = a_g / (g tan alpha), W = omega_g / p.",
+                 f"Panel titles: pulse shape and sign, A = a_g / (g tan alpha), W = omega_g / p. "
+                 f"Grey: +-[low, high] of the analytic model's sensitivity band of the peak "
+                 f"(docs/records.md).",
             name=f"histories_{scene}", png_dir=figdir))
     sections.append(("histories-section", "Rotation histories", "\n".join(hist) or
                      "<p>No pulse case finished.</p>"))
@@ -104,10 +159,18 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             "max_abs_error_over_alpha", "t_first_impact_error", "n_impacts", "n_impacts_ref",
             "eta_mean_rel_error", "overturned", "overturned_ref", "verdict_agrees",
             "energy_gained_at_impact", "max_penetration", "max_sliding", "real_time_factor"]
-    tab = H.html_table(shown[shown["part"] == "pulse"] if len(shown) else shown, cols,
-                       units=units, table_id="cases", scroll=True)
-    sections.append(("cases-section", "Every pulse case", H.grade_legend() + tab +
+    if "within_band" in shown:
+        cols[4:4] = ["band_low", "band_high", "within_band", "band_distance"]
+    pulse_rows = shown[shown["part"] == "pulse"] if len(shown) else shown
+    tab = H.html_table(pulse_rows, cols, units=units, table_id="cases", scroll=True)
+    sections.append(("cases-section", "Every pulse case", H.grade_legend()
+                     + band_summary_html(pulse_rows, "pulse-case peaks") + tab +
                      '<p>All columns: <a href="metrics.csv">metrics.csv</a>.</p>'))
+
+    # fracture cases
+    frac = shown[shown["part"] == "fracture"] if len(shown) else shown
+    if len(frac):
+        sections.append(("fracture-section", "Fracture", fracture_html(frac, units)))
 
     # eta
     etah = []
@@ -189,8 +252,10 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             F.plot_record_peaks(records, title="Peak rotation per record"),
             "Peak rotation max |phi| / alpha [-] of the free-standing and the hybrid "
             "(eps_f = 1 %) asymmetric frame under each record, as recorded (filled) and "
-            "reversed (open); triangles at the top: overturned.", name="record_peaks",
-            png_dir=figdir) + "<details><summary>record runs (table)</summary>" + H.html_table(
+            "reversed (open); triangles at the top: overturned. Grey: the analytic model's "
+            "own sensitivity band (eta x (1 +- 0.5 %, 1 %), pivots +- 1 mm, record x (1 +- "
+            "1 %), half-sample resampling; docs/records.md).", name="record_peaks",
+            png_dir=figdir) + band_summary_html(records) + "<details><summary>record runs (table)</summary>" + H.html_table(
                 records, list(CAMPAIGN_COLUMNS["record_peaks.csv"]), units=units,
                 scroll=True) + "</details>"))
 

@@ -244,9 +244,11 @@ def plot_histories(runs: Mapping[str, Any], *, alpha: float, title: str | None =
 
 
 def plot_history_grid(panels: Sequence[tuple[str, Mapping[str, Any]]], *, alpha: float,
-                      ncols: int = 2, title: str | None = None) -> Figure:
+                      ncols: int = 2, title: str | None = None,
+                      bands: Sequence[tuple[float, float] | None] | None = None) -> Figure:
     """Several compact rotation-history panels (phi / alpha [-] against t [s]), one per
-    ``(panel title, runs)`` pair, all backends overlaid in each (analytic bold)."""
+    ``(panel title, runs)`` pair, all backends overlaid in each (analytic bold); ``bands``: per
+    panel None or (low, high), the analytic sensitivity band of max|phi| / alpha, shaded."""
     _check_alpha(alpha)
     if not panels:
         raise ValueError("plot_history_grid needs at least one panel")
@@ -257,6 +259,9 @@ def plot_history_grid(panels: Sequence[tuple[str, Mapping[str, Any]]], *, alpha:
     for k, (ptitle, runs) in enumerate(panels):
         traces = {n: as_trace(v) for n, v in runs.items()}
         _plot_traces(axes[k], traces, alpha, legend=(k == 0))
+        b = bands[k] if bands is not None and k < len(bands) else None
+        for sgn in ((1.0, -1.0) if b is not None and all(map(math.isfinite, b)) else ()):
+            axes[k].axhspan(sgn * b[0], sgn * b[1], color="0.5", alpha=0.25, lw=0, zorder=0)
         axes[k].set_title(ptitle, fontsize=9)
         axes[k].set_xlabel("t [s]")
     for ax in axes[len(panels):]:
@@ -569,7 +574,9 @@ def plot_record_peaks(df: pd.DataFrame, *, title: str | None = None) -> Figure:
     black, larger). Overturned runs are drawn at the top of the panel as triangles.
 
     ``df`` columns: record, frame, polarity (+1/-1), backend, max_abs_phi_over_alpha [-],
-    overturned (bool), status.
+    overturned (bool), status; with band_low and band_high (the analytic model's sensitivity
+    band, ``rockbench.sensitivity``), each record's band is shaded grey behind its markers
+    (darker: as recorded, lighter: reversed).
     """
     frames = list(dict.fromkeys(df["frame"])) if len(df) else ["-"]
     records = list(dict.fromkeys(df["record"])) if len(df) else []
@@ -585,6 +592,11 @@ def plot_record_peaks(df: pd.DataFrame, *, title: str | None = None) -> Figure:
             if len(ok) else pd.Series(dtype=float)
         top = float(finite.max()) * 1.25 if len(finite) and np.isfinite(finite.max()) else 1.0
         top = max(top, 1.1)
+        shade = s.dropna(subset=["band_low", "band_high"]) if "band_low" in s else s.iloc[:0]
+        for _, b in shade.drop_duplicates(["record", "polarity"]).iterrows():  # the band
+            x0 = records.index(b["record"]) - 0.4
+            ax.fill_between([x0, x0 + 0.8], min(b["band_low"], top), min(b["band_high"], top),
+                            color="0.55", lw=0, alpha=0.22 if b["polarity"] == 1 else 0.12)
         for j, name in enumerate(backends):
             for pol, filled in ((1, True), (-1, False)):
                 r = ok[(ok["backend"] == name) & (ok["polarity"] == pol)]

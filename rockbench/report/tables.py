@@ -19,7 +19,7 @@ __all__ = ["CAMPAIGN_COLUMNS", "SPEED_COLUMNS", "metrics_table", "eta_tables",
 #: Columns of the campaign's CSV files (beyond the METRIC_COLUMNS / ETA_COLUMNS they repeat).
 CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
     "metrics.csv": {
-        "part": "-, pulse | free (free rocking)",
+        "part": "-, pulse | fracture (hybrid pulse cases that fracture) | free (free rocking)",
         "case": "-, short label of the case",
         "scene": "-, built-in scene name",
         "shape": "-, symmetric | antisymmetric Ricker pulse (empty: free rocking)",
@@ -27,6 +27,13 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "A": "-, a_g / (g tan alpha)",
         "W": "-, omega_g / p",
         "phi0": "rad, initial rotation",
+        "band_low": "-, smallest max|phi| / alpha of the analytic model under the perturbations "
+                    "of rockbench.sensitivity (pulse and fracture cases; docs/records.md)",
+        "band_high": "-, largest max|phi| / alpha under those perturbations",
+        "within_band": "-, bool: this backend's peak lies within the band (an overturned run: "
+                       "some analytic run of the band overturns too)",
+        "band_distance": "-, signed distance of the backend's peak to the band, in alpha (0 "
+                         "inside)",
         "(then)": "every column of rockbench.compare.METRIC_COLUMNS",
     },
     "eta.csv": {"scene": "-, scene (free rocking)", "phi0": "rad, initial rotation",
@@ -71,6 +78,15 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "max_abs_phi_over_alpha": "-", "overturned": "-, bool",
         "overturned_ref": "-, analytic verdict", "verdict_agrees": "-, bool",
         "peak_rel_error": "-, max|phi| / max|phi_ref| - 1 (both ok and not overturned)",
+        "band_low": "-, smallest max|phi| / alpha of the analytic model under the perturbations "
+                    "of rockbench.sensitivity (docs/records.md)",
+        "band_nominal": "-, the unperturbed analytic max|phi| / alpha of the band's runs",
+        "band_high": "-, largest max|phi| / alpha under those perturbations",
+        "band_verdict_agreement": "-, fraction of perturbed analytic runs with the unperturbed "
+                                  "overturning verdict",
+        "within_band": "-, bool: the backend's peak lies in [band_low, band_high] (an overturned "
+                       "run: some analytic run of the band overturns too)",
+        "band_distance": "-, signed distance of the peak to the band, in alpha (0 inside)",
         "real_time_factor": "-"},
 }
 
@@ -142,7 +158,8 @@ def _case_columns(job: Mapping[str, Any], label: str, phi0: float) -> dict[str, 
     if job["kind"] == "free":
         return {"part": "free", "case": label, "scene": job["scene"], "shape": "",
                 "sign": pd.NA, "A": math.nan, "W": math.nan, "phi0": phi0}
-    return {"part": "pulse", "case": label, "scene": job["scene"], "shape": m["shape"],
+    part = "fracture" if job["kind"] == "fracture" else "pulse"
+    return {"part": part, "case": label, "scene": job["scene"], "shape": m["shape"],
             "sign": int(m["sign"]), "A": float(m["A"]), "W": float(m["W"]), "phi0": phi0}
 
 
@@ -154,8 +171,18 @@ def metrics_table(payloads: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
             continue
         cols = _case_columns(p["job"], p["label"], p["phi0"])
         t = p["table"].copy()
-        for k, v in reversed(list(cols.items())):
-            t.insert(0, k, v)
+        band = p.get("band") or {}
+        judged = p.get("band_judged") or {}
+        pos = 0
+        for k, v in cols.items():
+            t.insert(pos, k, v)
+            pos += 1
+        t.insert(pos, "band_low", float(band.get("low", math.nan)))
+        t.insert(pos + 1, "band_high", float(band.get("high", math.nan)))
+        t.insert(pos + 2, "within_band", pd.array(
+            [judged.get(b, (None, math.nan))[0] for b in t["backend"]], dtype="boolean"))
+        t.insert(pos + 3, "band_distance",
+                 [float(judged.get(b, (None, math.nan))[1]) for b in t["backend"]])
         frames.append(t)
     if not frames:
         return pd.DataFrame()

@@ -69,7 +69,11 @@ def plot_work_precision(table: pd.DataFrame, *, errors: Sequence[str] = ("worst_
     dt), the Pareto front of the panel as a grey step line with ringed points. Settings whose
     error is infinite (a run not ok or a wrong overturning verdict) are drawn as crosses on the
     top edge. ``tolerance`` [-] draws a horizontal line (an advice's tolerance)."""
-    errors = [e for e in errors if e in table.columns]
+    def has_data(col: str) -> bool:
+        v = np.abs(table[col].astype(float).to_numpy())
+        return bool(np.any(np.isfinite(v) & (v > 0)))
+
+    errors = [e for e in errors if e in table.columns and has_data(e)] or ["worst_error"]
     fig = Figure(figsize=(6.0 * len(errors) + 0.6, 4.8), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, max(1, len(errors)), squeeze=False)).ravel()
     for ax, err in zip(axes, errors):
@@ -106,9 +110,9 @@ def plot_work_precision(table: pd.DataFrame, *, errors: Sequence[str] = ("worst_
         if tolerance is not None:
             ax.axhline(tolerance, color="#c62828", lw=0.8, ls=":",
                        label=f"tolerance {tolerance:g}")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
         if finite.size:
+            ax.set_xscale("log")
+            ax.set_yscale("log")
             ax.set_ylim(bottom, top * 1.5)
         ax.set_xlabel("cost: process CPU s per simulated s [s/s]\n(median of repeats, bars "
                       "min-max; left = cheaper; labels: dt [s])")

@@ -353,7 +353,10 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
             "dt_case": dict(c["dt_case"]), "dt_tail": float(c["pulse_tail"]),
             "free_phi0": float(c["free_phi0"]), "free_duration": float(c["free_duration"]),
             "max_records": None, "record_tail": None,
-            "record_frames": dict(c["record_frames"])}
+            "record_duration": (float(c["record_duration"]) if "record_duration" in c
+                                else None),
+            "record_frames": dict(c["record_frames"]),
+            "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float))}
     q = c["quick"]
     quick = dict(full, scenes=tuple(q["scenes"]), pulse_points=_pairs(q["pulse_points"]),
                  pulse_shapes=_pairs(q["pulse_shapes"], (str, int)),
@@ -363,7 +366,10 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
                  dt_sweep=tuple(map(float, q["dt_sweep"])), dt_case=dict(c["dt_case"]),
                  dt_tail=float(q["dt_tail"]), free_duration=float(q["free_duration"]),
                  max_records=int(q["max_records"]), record_tail=float(q["record_tail"]),
-                 record_frames=dict(c["record_frames"]))
+                 record_duration=None,
+                 record_frames=dict(c["record_frames"]),
+                 fracture_cases=_pairs(q.get("fracture_cases", ()),
+                                       (str, str, int, float, float)))
     return full, quick
 
 
@@ -396,7 +402,9 @@ def campaign_plan(quick: bool = False) -> dict[str, Any]:
     ``map_A``, ``map_W``, ``map_duration_tail`` [s] (None: pulse + 10 s), ``dt_sweep`` [s],
     ``dt_case`` (scene, shape, sign, A, W), ``dt_tail`` [s], ``free_phi0`` [alpha],
     ``free_duration`` [s], ``max_records`` (None: all), ``record_tail`` [s] (None: record +
-    10 s), ``record_frames`` (label -> scene).
+    10 s), ``record_duration`` [s] (cap on a record run's length from its start, None: no
+    cap), ``record_frames`` (label -> scene), ``fracture_cases`` ((scene, shape, sign, A, W):
+    hybrid pulse cases where the analytic model fractures the devices).
 
     ``quick``: a few cases (two scenes, one pulse, a 2 x 2 map, two time steps, shorter
     runs) for tests and a first look.

@@ -32,7 +32,15 @@ ASYM = load_scene("paper-asymmetric")
 SYM = load_scene("paper-symmetric")
 EPS1 = load_scene("paper-asymmetric-hybrid-eps1")
 BLOCK = load_scene("housner-block")
-EL_CENTRO = Path("/work/shared/records/IV1940_ElCentro_180.AT2")
+def _el_centro() -> Path:
+    """El Centro 1940 (PEER IV1940_ElCentro_180): the package's copy if shipped, else the shared
+    one."""
+    from importlib import resources
+    packaged = Path(str(resources.files("rockbench"))) / "records" / "IV1940_ElCentro_180.AT2"
+    return packaged if packaged.exists() else Path("/work/shared/records/IV1940_ElCentro_180.AT2")
+
+
+EL_CENTRO = _el_centro()
 
 VERDICTS = ("overturned", "exceeded_critical", "fractured")
 PHI_TOL = 1e-6        # history: |phi_compiled - phi_reference| / alpha on the output grid

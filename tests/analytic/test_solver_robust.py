@@ -20,6 +20,7 @@ import itertools
 import math
 import time
 
+import numpy as np
 import pytest
 
 import rockbench as rb
@@ -147,8 +148,9 @@ def test_chatter_settles_with_unchanged_peak_and_verdicts(monkeypatch):
 
 def test_free_rocking_chatter_settles_before_the_rest_threshold(monkeypatch):
     """Free rocking from 2e-6 alpha: its first post-impact velocity is ~2e-3 p alpha; the
-    chatter rule settles it once two successive ones are <= 1e-3 p alpha, the rest rule alone
-    only at 1e-4 p alpha, some 50 impacts later. The peak is the initial rotation either way."""
+    chatter rule settles it once two successive ones are <= CHATTER_VELOCITY_RATIO (3e-4)
+    p alpha, the rest rule alone only at 1e-4 p alpha, some 25 impacts later (44 and 70
+    impacts). The peak is the initial rotation either way."""
     sc = rb.load_scene("paper-symmetric")
     ref = Reference(sc)
     phi0 = 2e-6 * sc.alpha
@@ -157,25 +159,43 @@ def test_free_rocking_chatter_settles_before_the_rest_threshold(monkeypatch):
     monkeypatch.setattr(rules, "CHATTER_VELOCITY_RATIO", 0.0)
     r0 = simulate(sc, None, phi0=phi0, duration=2.0, settings=MINIMAL, reference=ref)
     assert r.summary.max_abs_phi == r0.summary.max_abs_phi == pytest.approx(phi0, rel=1e-12)
-    assert r0.summary.n_impacts > r.summary.n_impacts + 30
+    assert r0.summary.n_impacts >= r.summary.n_impacts + 20
     after = r.impacts()["phidot_after"].abs().to_numpy()
     assert after[-1] <= v_chat and after[-2] <= v_chat
 
 
 # --- progress guarantee --------------------------------------------------------------------------
+class _Held(RickerPulse):
+    """A ground acceleration held at twice the uplift threshold: the structure at rest uplifts
+    at once, whenever it is asked."""
+
+    def __init__(self, level: float):
+        self._level = level
+        super().__init__(level, 1.0)
+
+    def acceleration(self, t):
+        if isinstance(t, (float, int)):
+            return self._level
+        return np.full(np.shape(t), self._level)
+
+
 def test_a_stalled_event_loop_returns_an_invalid_result(monkeypatch):
-    """Without the uplift margin (the old rule) a grazing pulse makes the loop uplift and come to
-    rest at the same instant forever: the guard ends it with status invalid, fast."""
-    monkeypatch.setattr(rules, "UPLIFT_RTOL", 0.0)
-    sc = rb.load_scene("paper-symmetric")
-    pulse = RickerPulse.dimensionless(1.0, 1.0, sc.structure, "symmetric", 1)
-    r, cpu = timed(simulate, sc, pulse, settings=MINIMAL)
+    """A spinning loop, forced: the ground always uplifts the structure at rest, and a
+    monkeypatched equation of motion pulls it straight back (phi'' = -1 rad/s^2 at phi = 0), so
+    every uplift ends in an impact an instant later, at rest, and uplifts again, without end.
+    The guard ends it with status invalid, in well under a second, never raising."""
+    sc = rb.load_scene("paper-asymmetric")
+    ref = Reference(sc)
+    monkeypatch.setattr(ref.dyn[1], "acceleration", lambda *args: -1.0)
+    motion = _Held(2.0 * ref.lam[1] * G)
+    r, cpu = timed(simulate, sc, motion, duration=5.0, settings=MINIMAL, reference=ref)
     assert r.summary.status == "invalid" and not r.ok
     assert "no progress" in r.summary.reason
     assert cpu < 1.0
     # the history stops where the loop stalled
-    assert r.history["t"].iloc[-1] < pulse.t_end
-    assert r.cost.sim_time == pytest.approx(r.history["t"].iloc[-1] - pulse.t_start)
+    t_stop = r.history["t"].iloc[-1]
+    assert t_stop < motion.t_start + 5.0
+    assert r.cost.sim_time == pytest.approx(t_stop - motion.t_start)
 
 
 def test_progress_guard_with_an_artificially_strict_window(monkeypatch):
