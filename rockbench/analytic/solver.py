@@ -388,17 +388,23 @@ def _history(ref: Reference, mot, segments, t0: float, t_end: float,
     st = ref.scene.structure
     full = settings.history == "full"
     if st.kind == "frame" and full:
+        # vectorized over the samples of each rocking direction; device columns only when the
+        # scene has devices
+        dev = ref.scene.devices if ref.scene.has_devices else None
         thb, thr = np.zeros_like(tg), np.zeros_like(tg)
         el, er, dl, dr = (np.zeros_like(tg) for _ in range(4))
-        for i in np.nonzero(mode)[0]:
-            dyn = ref.dyn[int(mode[i])]
-            cfg = dyn.configuration(float(phi[i]))
-            thb[i], thr[i] = cfg.bodies[1].theta, cfg.bodies[2].theta
-            ds = dyn.device_state(cfg)
-            el[i], er[i], dl[i], dr[i] = (ds.elong_left, ds.elong_right,
-                                          ds.dchord_left * phid[i], ds.dchord_right * phid[i])
+        for s in (1, -1):
+            idx = np.flatnonzero(mode == s)
+            if not idx.size:
+                continue
+            dyn = ref.dyn[s]
+            ang = dyn.mechanism.angles_many(phi[idx])
+            thb[idx], thr[idx] = ang[0], ang[1]
+            if dev is not None:
+                e_l, e_r, c_l, c_r = dyn.device_state_many(phi[idx], ang)
+                el[idx], er[idx] = e_l, e_r
+                dl[idx], dr[idx] = c_l * phid[idx], c_r * phid[idx]
         cols.update(theta_beam=thb, theta_right=thr)
-        dev = ref.scene.devices if ref.scene.has_devices else None
         k = dev.tendon_stiffness if dev else 0.0
         c = dev.damping if dev else 0.0
         cols.update(tendon_elong_left=np.where(intact, el, 0.0) if dev else np.zeros_like(tg),
