@@ -36,6 +36,12 @@ __all__ = ["ADVISE_DTS", "QUICK_DTS", "Advice", "advise", "decide", "advice_for_
 
 #: Time steps [s] tried, largest first.
 ADVISE_DTS: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
+#: Engines whose cheapest passing setting costs at most this factor x the cheapest one's are
+#: marked ``tie_with_cheapest``. On the shared 2-core machine of docs/choosing.md the repeats of
+#: one sweep agreed within 2 %, but the same setting measured in sweeps 35 minutes apart moved
+#: by up to 40 % (pymunk, dt 2e-3: 0.0123 and 0.0088 CPU s per simulated s; CPU time still
+#: depends on what shares the core), so a smaller difference is not a ranking.
+TIE = 1.25
 #: Time steps [s] tried with ``quick``.
 QUICK_DTS: tuple[float, ...] = (4e-3, 2e-3, 1e-3)
 
@@ -54,7 +60,8 @@ class Advice:
         ``engine``, ``meets`` (bool), ``status`` ("meets", "cannot reach", "unavailable"),
         ``setting`` / ``dt`` [s] / ``worst_error`` [-] / ``cpu_per_sim_s`` [s/s] /
         ``real_time_factor`` [-] (the cheapest passing setting; for an engine that cannot reach
-        the tolerance: its best setting), ``reason`` (why it cannot, in words);
+        the tolerance: its best setting), ``reason`` (why it cannot, in words),
+        ``tie_with_cheapest`` (engines that meet it: cost within :data:`TIE` of the cheapest);
     considered : every engine name considered, in the order given;
     evidence : the tradeoff rows behind the answer (every setting run);
     quick : whether the reduced validation set was used; cases : the validation set;
@@ -101,6 +108,10 @@ class Advice:
             lines.append(f"  use {rec['engine']} at {rec['setting']}: worst error "
                          f"{100 * rec['worst_error']:.3g} %, {rec['cpu_per_sim_s']:.3g} CPU s "
                          f"per simulated s (real-time factor {rec['real_time_factor']:.3g})")
+            ties = [r["engine"] for r in self.ranking[1:] if r.get("tie_with_cheapest")]
+            if ties:
+                lines.append(f"  (as cheap within {100 * (TIE - 1):.0f} %, a tie on this "
+                             f"machine: {', '.join(ties)})")
         else:
             lines.append("  no engine reaches this tolerance at the settings tried")
         for i, r in enumerate(self.ranking, 1):
@@ -161,6 +172,8 @@ def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | No
                                      f"at {best['setting']} > tolerance "
                                      f"{100 * tolerance:g} % (tried: {tried})"})
     meets.sort(key=lambda r: (r["cpu_per_sim_s"], -r["dt"]))
+    for r in meets:   # CPU time moves by a few percent between measurements: call it a tie
+        r["tie_with_cheapest"] = r["cpu_per_sim_s"] <= TIE * meets[0]["cpu_per_sim_s"]
     cannot.sort(key=lambda r: (r["worst_error"], r["cpu_per_sim_s"]))
     return meets + cannot + missing
 

@@ -29,6 +29,7 @@ def test_decide_picks_the_cheapest_passing_setting():
     assert [x["engine"] for x in r] == ["fast", "slow", "bad"]
     assert r[0]["meets"] and r[0]["setting"] == "dt=0.002" and r[0]["cpu_per_sim_s"] == 0.02
     assert r[1]["meets"] and r[1]["setting"] == "dt=0.001"
+    assert r[0]["tie_with_cheapest"] and not r[1]["tie_with_cheapest"]   # 0.1 vs 0.02 s/s
     # the cheapest engine overall cannot reach 2 %: listed with its best error, not chosen
     assert not r[2]["meets"] and r[2]["status"] == "cannot reach"
     assert r[2]["worst_error"] == 0.5 and "50 %" in r[2]["reason"]
@@ -36,6 +37,13 @@ def test_decide_picks_the_cheapest_passing_setting():
     r = A.decide(_table(), 0.005)
     assert r[0]["engine"] == "fast" and r[0]["setting"] == "dt=0.001"
     assert [x["status"] for x in r[1:]] == ["cannot reach", "cannot reach"]
+
+
+def test_decide_calls_near_equal_costs_a_tie():
+    t = _table()
+    t.loc[t["setting"].eq("dt=0.001") & t["engine"].eq("slow"), "cpu_per_sim_s"] = 0.021
+    r = A.decide(t, 0.02)
+    assert [x["engine"] for x in r[:2]] == ["fast", "slow"] and r[1]["tie_with_cheapest"]
 
 
 def test_decide_names_unavailable_engines():

@@ -1,0 +1,168 @@
+"""The command-line commands of issue 13 (``docs/choosing.md``): ``rockbench tradeoff``,
+``rockbench advise`` and ``rockbench stress`` - their arguments (:func:`add_choosing_commands`,
+called by :func:`rockbench.cli.build_parser`) and their commands (``cmd_*``, dispatched by
+:data:`rockbench.cli.COMMANDS`). Errors follow :mod:`rockbench.cli`: one line, exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+from .cli_input import load_scene_from
+
+__all__ = ["add_choosing_commands", "cmd_tradeoff", "cmd_advise", "cmd_stress"]
+
+
+def _dts(text: str) -> list[float]:
+    try:
+        vals = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected time steps like 4e-3,2e-3, got {text!r}"
+                                         ) from None
+    if not vals or not all(v > 0 and math.isfinite(v) for v in vals):
+        raise argparse.ArgumentTypeError(f"expected positive time steps [s], got {text!r}")
+    return vals
+
+
+def add_choosing_commands(sub) -> None:
+    """tradeoff, advise and stress (issue 13; docs/choosing.md)."""
+    from .cli import _add_scene_options, _count, _names, _positive
+
+    p = sub.add_parser("tradeoff", help="work-precision of every engine and setting on a scene "
+                       "(error against the analytic model vs CPU cost)")
+    _add_scene_options(p)
+    p.add_argument("--engines", type=_names, metavar="A,B,...",
+                   help="engines (default: every available one)")
+    p.add_argument("--dt", type=_dts, metavar="S,S,...",
+                   help="time steps [s] (default 4e-3,2e-3,1e-3,5e-4,2.5e-4,1e-4)")
+    p.add_argument("--setting", dest="extra", metavar="[ENGINE:]NAME=VALUE,...",
+                   action="append", default=[],
+                   help="an extra setting swept at every dt (e.g. pymunk:iterations=60)")
+    p.add_argument("--repeat", type=_count, default=3, metavar="N",
+                   help="runs of each case; cost = median CPU time (default 3)")
+    p.add_argument("--quick", action="store_true", help="the reduced validation set")
+    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--store", metavar="PATH", help="result store folder (reused on a rerun)")
+    p.add_argument("--out", metavar="DIR",
+                   help="write tradeoff.csv, tradeoff_runs.csv and work_precision.png")
+    p.add_argument("--json", action="store_true", help="print the table as JSON")
+
+    p = sub.add_parser("advise", help="the cheapest setting of each engine within a tolerance")
+    _add_scene_options(p)
+    p.add_argument("--tolerance", type=_positive, required=True, metavar="X",
+                   help="relative bound on the worst validation error (0.02 = 2 %%)")
+    p.add_argument("--engines", type=_names, metavar="A,B,...",
+                   help="engines considered (default: every registered engine)")
+    p.add_argument("--quick", action="store_true",
+                   help="reduced validation set, one repeat, dt 4e-3..1e-3 (a first look)")
+    p.add_argument("--store", metavar="PATH", help="result store folder (reused on a rerun)")
+    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--json", action="store_true", help="print the advice as JSON")
+
+    p = sub.add_parser("stress", help="every engine at the extremes, one axis at a time")
+    p.add_argument("--engines", type=_names, metavar="A,B,...",
+                   help="engines (default: every available one)")
+    p.add_argument("--full", action="store_true", help="the whole ranges (slow)")
+    p.add_argument("--axes", type=_names, metavar="A,B,...", help="only these axes")
+    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--out", metavar="DIR",
+                   help="write stress.csv and one stability map per engine (PNG)")
+    p.add_argument("--json", action="store_true", help="print the table as JSON")
+
+
+def _executor(args: argparse.Namespace) -> dict[str, Any]:
+    """--workers N: a pool of N processes; 1: in this process (no pool to start)."""
+    if args.workers == 1:
+        return {"executor": "serial"}
+    return {"workers": args.workers} if args.workers else {}
+
+
+def _png(fig, path: Path) -> None:
+    fig.savefig(path, dpi=110)
+
+
+def cmd_tradeoff(args: argparse.Namespace) -> int:
+    from .cli import _output_folder, _pandas_display, _print_json, _write_atomic
+    from .report.tradeoff_figures import plot_work_precision
+    from .runner import resolve_engines
+    from .tradeoff import TABLE_COLUMNS, tradeoff
+
+    scene = load_scene_from(args)
+    if args.engines is not None:
+        resolve_engines(args.engines, name="--engines")
+    if args.out:
+        _output_folder(Path(args.out) / "tradeoff.csv", "--out")
+    t = tradeoff(scene, args.engines, dts=args.dt, settings=args.extra, repeat=args.repeat,
+                 quick=args.quick, store=args.store,
+                 progress=sys.stderr.isatty() and not args.json, **_executor(args))
+    if args.out:
+        out = Path(args.out)
+        _write_atomic({out / "tradeoff.csv": t.table,
+                       out / "tradeoff_runs.csv": t.runs.drop(columns=["_cpu"])}, "--out")
+        _png(plot_work_precision(t.table, title=f"{scene.name}: work-precision"),
+             Path(args.out) / "work_precision.png")
+    if args.json:
+        _print_json(t.to_json())
+        return 0
+    cols = ["engine", "setting", "worst_error", "verdict", "peak_error_worst",
+            "peak_error_median", "nrmse_worst", "eta_error_worst", "verdicts_agree",
+            "self_peak_error_worst", "cpu_per_sim_s", "real_time_factor"]
+    with _pandas_display():
+        print(t.table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    print("units: errors relative [-]; cpu_per_sim_s: process CPU s per simulated s "
+          "(median of repeats); real_time_factor: simulated s per CPU s")
+    if t.unavailable:
+        print("unavailable: " + "; ".join(f"{k}: {v}" for k, v in t.unavailable.items()))
+    if args.out:
+        print(f"tables and figure: {args.out}")
+    return 0
+
+
+def cmd_advise(args: argparse.Namespace) -> int:
+    from .cli import _print_json
+    from .advise import advise
+    from .runner import resolve_engines
+
+    scene = load_scene_from(args)
+    if args.engines is not None:
+        resolve_engines(args.engines, name="--engines")
+    a = advise(scene, args.tolerance, args.engines, args.store, quick=args.quick,
+               progress=sys.stderr.isatty() and not args.json, **_executor(args))
+    if args.json:
+        _print_json(a.to_json())
+    else:
+        print(a.text())
+    return 0
+
+
+def cmd_stress(args: argparse.Namespace) -> int:
+    from .cli import _output_folder, _pandas_display, _print_json, _write_atomic
+    from .report.tradeoff_figures import plot_stability_map
+    from .runner import resolve_engines
+    from .stress import breaking_points, stress
+
+    if args.engines is not None:
+        resolve_engines(args.engines, name="--engines")
+    if args.out:
+        _output_folder(Path(args.out) / "stress.csv", "--out")
+    s = stress(args.engines, full=args.full, axes=args.axes,
+               progress=sys.stderr.isatty() and not args.json, **_executor(args))
+    if args.out:
+        _write_atomic({Path(args.out) / "stress.csv": s.table}, "--out")
+        for eng in dict.fromkeys(s.table["engine"]):
+            _png(plot_stability_map(s.table, eng), Path(args.out) / f"stability_{eng}.png")
+    if args.json:
+        _print_json(s.to_json())
+        return 0
+    cols = ["engine", "axis", "value", "class", "error", "status", "flags", "reason"]
+    with _pandas_display():
+        print(s.table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+        print("\nfirst break away from the paper's frame, per engine and axis:")
+        b = breaking_points(s.table)
+        print(b.to_string(index=False) if len(b) else "none: every point within 5 % or "
+              "outside the analytic model")
+    return 0
