@@ -386,6 +386,13 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                     scheduler=dask_address if executor == "dask" else None)
     timings["maps"] = time.perf_counter() - t
 
+    # 3c: choosing a modelling approach (work-precision, advice, stability) -----------------
+    t = time.perf_counter()
+    from .campaign_choice import run_choice
+
+    choice = run_choice(names, store_dir, quick=quick, workers=workers, progress=progress)
+    timings["choice"] = time.perf_counter() - t
+
     # 5: records ----------------------------------------------------------------------------
     t = time.perf_counter()
     records = pd.DataFrame()
@@ -400,13 +407,18 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     engines_tab = T.engine_summary(metrics, eta_summary, speed, omap)
     files = {"metrics.csv": metrics, "eta.csv": eta, "eta_summary.csv": eta_summary,
              "engines.csv": engines_tab, "speed_accuracy.csv": speed,
-             "overturning_map.csv": omap, "map_agreement.csv": maps["agreement"]}
+             "overturning_map.csv": omap, "map_agreement.csv": maps["agreement"],
+             "tradeoff.csv": choice["tradeoff"], "advice.csv": choice["advice"]}
     if len(records):
         files["record_peaks.csv"] = records
     for name, df in files.items():
         df.to_csv(out / name, index=False)
     lines = campaign_conclusion(engines_tab, metrics, eta_summary, speed, omap, records,
                                 hybrid=_hybrid(plan["scenes"]), map_scene=plan["map_scene"])
+    # the recommendation first (measured advice, CPU time), then the evidence; the median-
+    # based "closest" and the load-dependent "fastest" headlines give way to it
+    lines = choice["words"] + maps["words"] + [
+        x for x in lines if not x.startswith(("Closest to the analytic model", "Fastest engine"))]
 
     # page -------------------------------------------------------------------------------
     sections = P.page_sections(plan, names, missing, payloads, metrics, eta, eta_summary,
@@ -419,6 +431,11 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     at = next((i for i, sec in enumerate(sections) if sec[0] == "settings-section"),
               len(sections))
     g = ANALYTIC_GRID["grid"]
+    from .report.choice_page import choice_html
+
+    sections.insert(at, ("choice-section", "Choosing a modelling approach",
+                         choice_html(choice, out / "figures")))
+    at += 1
     sections.insert(at, ("maps-section", "Overturning maps (paper Figs. 4-7)", maps_html(
         maps, out / "figures",
         analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {ANALYTIC_GRID['amplitude']}, "

@@ -277,21 +277,36 @@ def test_short_pulse_long_run_is_fast():
 # --- a valid input refused -------------------------------------------------------------------
 def test_phi0_is_checked_against_the_fall_angle_of_its_direction(capsys):
     """paper-asymmetric: counterclockwise fall 6.81 alpha, clockwise 8.75 alpha. Before,
-    -7 alpha was refused with the counterclockwise limit."""
+    -7 alpha was refused with the counterclockwise limit (CLI and run_window)."""
+    from rockbench.engines.base import run_window
+
     scene = rb.load_scene("paper-asymmetric")
     fall = {s: scene.fall_angles[s] / scene.alpha for s in (1, -1)}
     assert fall[1] < 7.0 < fall[-1]
-    code, out, err = cli(capsys, "run", "paper-asymmetric", "--phi0", "-7", "--duration", "0.5")
+    t0, t1 = run_window(scene, None, 0.5, -7 * scene.alpha)
+    assert (t0, t1) == (0.0, 0.5)
+    code, out, err = cli(capsys, "run", "paper-asymmetric", "--engine", "pymunk", "--phi0", "-7",
+                         "--duration", "0.3")
     assert code == 0, err
-    r = rb.run(scene, None, phi0=-7 * scene.alpha, duration=0.5)
-    assert r.summary.status == "ok"
-    assert r.history["phi"].iloc[0] == pytest.approx(-7 * scene.alpha, rel=1e-9)
+    assert "phi0 = -7 alpha" in out
+    r = rb.run(scene, None, engine="pymunk", phi0=-7 * scene.alpha, duration=0.3)
+    assert r.history["phi"].iloc[0] == pytest.approx(-7 * scene.alpha, rel=1e-6)
     line = refused(capsys, "run", "paper-asymmetric", "--phi0", "7", names=("--phi0",))
-    assert "6.811" in line
+    assert "6.811" in line and "counterclockwise" in line
     line = refused(capsys, "run", "paper-asymmetric", "--phi0", "-9", names=("--phi0",))
-    assert "8.75" in line
+    assert "8.75" in line and "clockwise" in line
     with pytest.raises(ParameterError, match="clockwise fall angle"):
         rb.run(scene, None, phi0=-9 * scene.alpha, duration=0.5)
+    with pytest.raises(ParameterError, match="counterclockwise fall angle"):
+        run_window(scene, None, 0.5, 7 * scene.alpha)
+
+
+def test_phi0_beyond_the_smaller_fall_angle_runs_on_the_analytic_backend(capsys):
+    scene = rb.load_scene("paper-asymmetric")
+    r = rb.run(scene, None, phi0=-7 * scene.alpha, duration=0.5)
+    assert r.history["phi"].iloc[0] == pytest.approx(-7 * scene.alpha, rel=1e-9)
+    code, out, err = cli(capsys, "run", "paper-asymmetric", "--phi0", "-7", "--duration", "0.5")
+    assert code == 0, err
 
 
 # --- ranges of the pulse -------------------------------------------------------------------------
@@ -316,3 +331,26 @@ def test_limits_overrides_are_validated(monkeypatch):
     monkeypatch.setenv("ROCKBENCH_MAX_SAMPLES", "-3")
     with pytest.raises(ParameterError, match="ROCKBENCH_MAX_SAMPLES"):
         limit("max_samples")
+
+
+# --- found by the fuzz test ------------------------------------------------------------------
+def test_numeric_string_phi0_reaches_engines_as_a_float():
+    """phi0="0.1" passed run_window (float() converts it) and crashed pymunk with TypeError."""
+    scene = rb.load_scene("housner-block")
+    r = rb.run(scene, None, engine="pymunk", phi0="0.1", duration=0.2)
+    assert r.history["phi"].iloc[0] == pytest.approx(0.1, rel=1e-6)
+
+
+def test_absurd_atol_and_output_dt_are_refused(capsys):
+    """atol=1 ran and reported 7.8 alpha for a block released at 0.5 alpha."""
+    for setting, name in (("atol=1", "atol"), ("output_dt=10", "output_dt"),
+                          ("rtol=1e-20", "rtol")):
+        refused(capsys, "run", "housner-block", "--phi0", "0.5", "--setting", setting,
+                names=(name, f"ROCKBENCH_{name.upper()}"))
+
+
+def test_a_string_for_a_number_in_a_scene_file_is_refused(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('[structure]\ntype = "block"\nwidth = "1"\n')
+    with pytest.raises(SceneError, match="width"):
+        rb.load_scene(path)

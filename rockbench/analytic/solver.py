@@ -44,12 +44,12 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from ..constants import G
-from ..errors import ParameterError, check_positive
+from ..errors import ParameterError, check_positive, check_range
 from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
                       output_grid)
 from ..scene.scene import Scene
 from . import rules
-from .reference import Reference
+from .reference import Reference, reference_of
 
 __all__ = ["AnalyticSettings", "simulate"]
 
@@ -58,13 +58,21 @@ __all__ = ["AnalyticSettings", "simulate"]
 class AnalyticSettings:
     """Settings of the analytic backend.
 
-    rtol, atol : relative and absolute tolerances of solve_ivp (atol in rad and rad/s).
+    rtol, atol : relative and absolute tolerances of solve_ivp (atol in rad and rad/s); rtol in
+        [1e-13, 1e-3], atol in [1e-16, 1e-3] (limits ``rtol``, ``atol`` of
+        :mod:`rockbench.limits`, overridable with ROCKBENCH_RTOL / ROCKBENCH_ATOL).
     method : an explicit solve_ivp method ("DOP853" default, "RK45", "Radau" ... ).
-    output_dt : interval [s] of the history samples (independent of the integrator's steps).
+    output_dt : interval [s] of the history samples (independent of the integrator's steps),
+        in [1e-5, 1] s (limit ``output_dt``).
     rest_ratio : a post-impact |phi'| below rest_ratio * p * alpha [rad/s] ends rocking
         (default :data:`rockbench.analytic.rules.REST_RATIO`).
     history : "full" (every column) or "minimal" (t, phi, phidot, ground_acc, mode,
         devices_intact; other columns NaN) - minimal is faster for sweeps.
+    eta_factor : factor in (0, 2] [-] on the coefficient of restitution of every impact
+        (default 1: the analytic eta of the mechanism rocked into, Eq. 22 / the frame's
+        impulse-momentum projection). A sensitivity hook, not a physics setting: the
+        predictability band of :mod:`rockbench.sensitivity` runs the model with eta x (1 +-
+        0.5 %) and x (1 +- 1 %).
     """
 
     rtol: float = 1e-10
@@ -73,10 +81,18 @@ class AnalyticSettings:
     output_dt: float = 1e-3
     rest_ratio: float = rules.REST_RATIO
     history: str = "full"
+    eta_factor: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("rtol", "atol", "output_dt", "rest_ratio"):
-            check_positive(name, getattr(self, name))
+        from ..limits import check_in_limit
+
+        # rtol in [1e-13, 1e-3], atol in [1e-16, 1e-3] (rad, rad/s), output_dt in [1e-5, 1] s:
+        # limits of rockbench.limits (docs/errors.md); rtol >= 1 is no accuracy at all
+        for name in ("rtol", "atol", "output_dt"):
+            object.__setattr__(self, name, check_in_limit(name, name, getattr(self, name)))
+        object.__setattr__(self, "rest_ratio", check_positive("rest_ratio", self.rest_ratio))
+        object.__setattr__(self, "eta_factor",
+                           check_range("eta_factor", self.eta_factor, 0.0, 2.0, lo_open=True))
         if self.history not in ("full", "minimal"):
             raise ParameterError("history", self.history, "'full' or 'minimal'")
         if self.method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
@@ -130,7 +146,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         Precomputed constants of ``scene`` (saves their set-up in sweeps).
     """
     settings = settings or AnalyticSettings()
-    ref = reference if reference is not None and reference.scene == scene else Reference(scene)
+    ref = reference if reference is not None and reference.scene == scene else reference_of(scene)
     mot = motion if motion is not None else _Zero()
     t0 = float(mot.t_start)
     if duration is None:
@@ -141,8 +157,10 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     for name, v in (("phi0", phi0), ("phidot0", phidot0)):
         if not math.isfinite(v):
             raise ParameterError(name, v, "a finite number")
-    if abs(phi0) >= min(ref.fall.values()):
-        raise ParameterError("phi0", phi0, f"|phi0| < fall angle {min(ref.fall.values()):.4g} rad")
+    fall0 = ref.fall[1 if phi0 >= 0 else -1]
+    if abs(phi0) >= fall0:
+        raise ParameterError("phi0", phi0, f"|phi0| < the fall angle of its direction, "
+                                           f"{fall0:.4g} rad")
     if motion is None and phi0 == 0.0 and phidot0 == 0.0:
         raise ParameterError("phi0", phi0, "non-zero for a free-rocking run (no ground motion)")
     t_end = t0 + duration
@@ -313,7 +331,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         if kind == "impact":
             phi = 0.0
             post = -s
-            e = ref.eta[post]
+            e = ref.eta[post] * settings.eta_factor
             after = e * phid
             # eta <= 0 (possible for squat asymmetric frames): the post-impact mechanism cannot
             # start, the impact is perfectly plastic and the structure comes to rest

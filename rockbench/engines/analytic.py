@@ -27,7 +27,7 @@ class AnalyticBackend(Backend):
         return True, f"scipy {scipy.__version__}"
 
     def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
-        t0, t_end = run_window(self.scene, motion, duration, phi0)
+        t0, t_end = run_window(self.scene, motion, duration, phi0, settings=self.settings)
         cpu = time.process_time()
         if self.settings.method == "compiled":       # the numba path (maps, records)
             from ..analytic.compiled import simulate_compiled as integrate

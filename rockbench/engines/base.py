@@ -273,7 +273,7 @@ class EngineBackend(Backend):
     def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
         from .loop import device_geometry, finish, step_run
 
-        t0, t_end = run_window(self.scene, motion, duration, phi0)
+        t0, t_end = run_window(self.scene, motion, duration, phi0, settings=self.settings)
         ok, why = self.available()
         if not ok:
             raise BackendUnavailable(f"backend {self.name!r} is not available: {why}")

@@ -1,0 +1,73 @@
+"""The "choosing a modelling approach" part of the default campaign (issue 13): work-precision
+of every engine on the paper's asymmetric frame (reduced validation set, three time steps,
+process CPU time), the advice it supports at 2 % and 0.2 %, and the fast stability sweep.
+
+The full measurements (`rockbench tradeoff`, `rockbench advise`, `rockbench stress --full`)
+are in ``docs/choosing.md``; the report runs the reduced forms to stay within its budget and
+keeps them in the campaign's store.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Sequence
+
+import pandas as pd
+
+__all__ = ["CHOICE_SCENE", "CHOICE_DTS", "run_choice", "recommendation"]
+
+#: Scene and time steps [s] of the report's work-precision sweep.
+CHOICE_SCENE = "paper-asymmetric"
+CHOICE_DTS = (2e-3, 1e-3, 5e-4)
+
+
+def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
+               workers: int | None = None, progress: bool = False) -> dict[str, Any]:
+    """{"tradeoff": table, "advice": frame, "stress": table or None, "words": [str]}."""
+    from .advise import advice_for_report
+    from .stress import stress
+    from .tradeoff import tradeoff
+
+    names = [e for e in engines if e != "analytic"]
+    if not names:
+        return {"tradeoff": pd.DataFrame(), "advice": pd.DataFrame(), "stress": None,
+                "words": []}
+    dts = CHOICE_DTS[:2] if quick else CHOICE_DTS
+    t = tradeoff(CHOICE_SCENE, names, dts=dts, repeat=1, quick=True,
+                 self_consistency="none", workers=workers, store=store / "tradeoff",
+                 progress=progress)
+    advice = advice_for_report(t.table)
+    st = None if quick else stress(names, workers=workers, progress=progress).table
+    return {"tradeoff": t.table, "advice": advice, "stress": st,
+            "words": recommendation(advice)}
+
+
+def recommendation(advice: pd.DataFrame) -> list[str]:
+    """The report's headline: per tolerance, the recommended engine and setting (rank 1 when
+    it meets the tolerance), then the others in order, and those that cannot reach it."""
+    lines = []
+    if not len(advice):
+        return lines
+    for tol, g in advice.groupby("tolerance", sort=False):
+        g = g.sort_values("rank")
+        meets = g[g["status"] == "meets"]
+        pct = f"{100 * tol:g} %"
+        if len(meets):
+            b = meets.iloc[0]
+            text = (f"Within {pct} of the analytic model on {CHOICE_SCENE} (worst error over "
+                    f"the validation set): use {b['engine']} with {b['setting']} "
+                    f"(worst error {100 * b['worst_error']:.2f} %, "
+                    f"{b['cpu_per_sim_s']:.3g} CPU s per simulated s, real-time factor "
+                    f"{b['real_time_factor']:.3g})")
+            if len(meets) > 1:
+                text += "; then " + ", ".join(
+                    f"{r['engine']} ({r['setting']}, {100 * r['worst_error']:.2f} %, "
+                    f"{r['cpu_per_sim_s']:.3g} CPU s/s)" for _, r in meets.iloc[1:].iterrows())
+            lines.append(text + ".")
+        else:
+            lines.append(f"No engine reaches {pct} on {CHOICE_SCENE} at the time steps tried.")
+        miss = g[g["status"] != "meets"]
+        if len(miss):
+            lines.append(f"Not within {pct}: " + "; ".join(
+                f"{r['engine']} ({r['reason']})" for _, r in miss.iterrows()) + ".")
+    return lines
