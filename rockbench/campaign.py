@@ -269,7 +269,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                  records_dir: str | os.PathLike | None = None, quick: bool = False,
                  progress: bool = True, store: str | os.PathLike | None = None,
                  executor: str = "process", dask_address: str | None = None,
-                 workers: int | None = None, full_maps: bool = False) -> Path:
+                 workers: int | None = None, full: bool = False) -> Path:
     """Run the default campaign (module docstring) and write its report; return the path of
     ``out_dir/index.html``.
 
@@ -291,9 +291,10 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     executor : "process" (local process pool, one worker per core), "serial", or "dask"
         (``dask_address``: a running scheduler; none: a local cluster).
     workers : worker processes (default: one per available core).
-    full_maps : run every engine's overturning map at 12 x 12 x 4 on both map scenes
-        (:mod:`rockbench.campaign_maps`; the default report runs smaller engine grids to keep
-        ``make report`` within its budget); the maps are kept in ``store/maps`` and reused.
+    full : the long campaign: every engine's overturning map at 12 x 12 x 4 on both map
+        scenes (:mod:`rockbench.campaign_maps`) and the stability sweep of every engine
+        (:mod:`rockbench.campaign_choice`); the default keeps ``make report`` within its
+        budget. Everything is kept in the store and reused.
     """
     from .engines import available_backends
 
@@ -381,7 +382,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     t = time.perf_counter()
     from .campaign_maps import ANALYTIC_GRID, ENGINE_AXES, run_maps
 
-    maps = run_maps(names, store_dir / "maps", full=full_maps, quick=quick, progress=progress,
+    maps = run_maps(names, store_dir / "maps", full=full, quick=quick, progress=progress,
                     workers=workers,
                     scheduler=dask_address if executor == "dask" else None)
     timings["maps"] = time.perf_counter() - t
@@ -390,7 +391,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     t = time.perf_counter()
     from .campaign_choice import run_choice
 
-    choice = run_choice(names, store_dir, quick=quick, workers=workers, progress=progress)
+    choice = run_choice(names, store_dir, quick=quick, full=full, workers=workers,
+                        progress=progress)
     timings["choice"] = time.perf_counter() - t
 
     # 5: records ----------------------------------------------------------------------------

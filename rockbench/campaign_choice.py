@@ -22,8 +22,10 @@ CHOICE_DTS = (2e-3, 1e-3, 5e-4)
 
 
 def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
-               workers: int | None = None, progress: bool = False) -> dict[str, Any]:
-    """{"tradeoff": table, "advice": frame, "stress": table or None, "words": [str]}."""
+               full: bool = False, workers: int | None = None,
+               progress: bool = False) -> dict[str, Any]:
+    """{"tradeoff": table, "advice": frame, "stress": table or None, "words": [str]}; the
+    stability sweep (fast form of ``rockbench stress``) runs only with ``full``."""
     from .advise import advice_for_report
     from .stress import stress
     from .tradeoff import tradeoff
@@ -37,7 +39,7 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                  self_consistency="none", workers=workers, store=store / "tradeoff",
                  progress=progress)
     advice = advice_for_report(t.table)
-    st = None if quick else stress(names, workers=workers, progress=progress).table
+    st = stress(names, workers=workers, progress=progress).table if full else None
     return {"tradeoff": t.table, "advice": advice, "stress": st,
             "words": recommendation(advice)}
 

@@ -223,9 +223,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run the cases on a dask.distributed scheduler at ADDRESS")
     p.add_argument("--store", metavar="PATH",
                    help="result store (Parquet or CSV); finished cases are skipped on a rerun")
-    p.add_argument("--full-maps", action="store_true",
-                   help="every engine's overturning map at 12x12x4 on both map scenes "
-                        "(long; reuses the store)")
+    p.add_argument("--full", action="store_true",
+                   help="the long campaign: every engine's overturning map at 12x12x4 on both "
+                        "map scenes and the stability sweep (reuses the store)")
     from .cli_choosing import add_choosing_commands
 
     add_choosing_commands(sub)
@@ -561,7 +561,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         raise ParameterError("--records", args.records, "an existing folder of record files")
     if args.engines is not None:
         resolve_engines(args.engines, name="--engines")
-    kwargs: dict[str, Any] = {"full_maps": args.full_maps,
+    kwargs: dict[str, Any] = {"full": args.full,
                               "engines": args.engines, "records_dir": args.records,
                               "quick": args.quick, "store": args.store}
     if args.dask is not None:
