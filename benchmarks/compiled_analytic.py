@@ -34,7 +34,6 @@ from pathlib import Path
 
 import numpy as np
 
-from rockbench.analytic import compiled
 from rockbench.analytic.compiled import run_pulse_grid, simulate_compiled
 from rockbench.analytic.solver import AnalyticSettings, simulate
 from rockbench.scene.motion import RickerPulse

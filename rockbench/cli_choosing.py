@@ -89,7 +89,7 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
     from .cli import _output_folder, _pandas_display, _print_json, _write_atomic
     from .report.tradeoff_figures import plot_work_precision
     from .runner import resolve_engines
-    from .tradeoff import TABLE_COLUMNS, tradeoff
+    from .tradeoff import tradeoff
 
     scene = load_scene_from(args)
     if args.engines is not None:

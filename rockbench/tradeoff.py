@@ -40,7 +40,6 @@ keyed by the scene's data, the case, the engine and its settings, and the repeat
 from __future__ import annotations
 
 import functools
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -51,7 +50,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ParameterError
-from .validation import (ValidationCase, _analytic, _free_duration, _scene_from_key,
+from .validation import (ValidationCase, _analytic, _scene_from_key,
                          _scene_key, overturn_threshold, validation_set)
 
 __all__ = ["DEFAULT_DTS", "ValidationCase", "validation_set", "overturn_threshold", "Setting",

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import rockbench as rb
@@ -336,10 +336,10 @@ def scene_files(draw, folder: Path):
     text = {
         "block": f'name = "b"\n[structure]\ntype = "block"\nwidth = {w!r}\nheight = {h!r}\n',
         "bad_width": f'[structure]\ntype = "block"\nwidth = {value}\nheight = {h!r}\n',
-        "no_structure": f'name = "b"\ndescription = "no structure"\nfall_angle = 0.5\n',
+        "no_structure": 'name = "b"\ndescription = "no structure"\nfall_angle = 0.5\n',
         "no_type": f'[structure]\nwidth = {w!r}\n',
         "unknown_key": f'[structure]\ntype = "block"\nwidht = {w!r}\n',
-        "unknown_table": f'[structure]\ntype = "block"\n[material]\ndensity = 2500\n',
+        "unknown_table": '[structure]\ntype = "block"\n[material]\ndensity = 2500\n',
         "not_toml": draw(st.sampled_from(["[structure\n", "type = \n", "= 3\n", "\x00\x01",
                                           "[structure]\ntype = block\n"])),
         "structure_value": f"structure = {value}\n",

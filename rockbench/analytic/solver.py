@@ -61,7 +61,9 @@ class AnalyticSettings:
     rtol, atol : relative and absolute tolerances of solve_ivp (atol in rad and rad/s); rtol in
         [1e-13, 1e-3], atol in [1e-16, 1e-3] (limits ``rtol``, ``atol`` of
         :mod:`rockbench.limits`, overridable with ROCKBENCH_RTOL / ROCKBENCH_ATOL).
-    method : an explicit solve_ivp method ("DOP853" default, "RK45", "Radau" ... ).
+    method : a solve_ivp method ("DOP853" default, the reference; "RK45", "Radau" ...) or
+        "compiled": the same DOP853 scheme and event rules compiled with numba
+        (:mod:`rockbench.analytic.compiled`), the default of maps and record comparisons.
     output_dt : interval [s] of the history samples (independent of the integrator's steps),
         in [1e-5, 1] s (limit ``output_dt``).
     rest_ratio : a post-impact |phi'| below rest_ratio * p * alpha [rad/s] ends rocking
@@ -95,9 +97,11 @@ class AnalyticSettings:
                            check_range("eta_factor", self.eta_factor, 0.0, 2.0, lo_open=True))
         if self.history not in ("full", "minimal"):
             raise ParameterError("history", self.history, "'full' or 'minimal'")
-        if self.method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
+        if self.method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "compiled"):
             raise ParameterError("method", self.method,
-                                 "one of DOP853, RK45, RK23, Radau, BDF, LSODA")
+                                 "one of DOP853, RK45, RK23, Radau, BDF, LSODA (solve_ivp, the "
+                                 "reference) or compiled (the numba path, same scheme as "
+                                 "DOP853)")
 
 
 class _Zero:

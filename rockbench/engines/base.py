@@ -66,7 +66,6 @@ events and the effective eta from the sampled history.
 from __future__ import annotations
 
 import abc
-import math
 import time
 from dataclasses import asdict, dataclass, fields
 from typing import Any, ClassVar

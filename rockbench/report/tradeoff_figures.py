@@ -17,7 +17,6 @@ Units: cost in process CPU seconds per simulated second [s/s]; errors relative [
 
 from __future__ import annotations
 
-import math
 from typing import Sequence
 
 import numpy as np

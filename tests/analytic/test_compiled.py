@@ -100,9 +100,10 @@ def compare_map(scene, cells) -> dict:
 
 
 # --- maps --------------------------------------------------------------------------------------
+@pytest.mark.parametrize("n", [5, pytest.param(10, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("scene", [ASYM, EPS1], ids=lambda s: s.name)
-def test_map_10x10x4_agrees_with_reference(scene):
-    out = compare_map(scene, _cells(10, 10))
+def test_map_nxnx4_agrees_with_reference(scene, n):
+    out = compare_map(scene, _cells(n, n))
     assert not out["bad"], out["bad"][:3]
     assert out["worst"] <= PEAK_TOL
     # the map is not trivial: both verdicts occur (and fracture on the fracturing frame)
@@ -297,6 +298,19 @@ def test_uplift_exactly_at_threshold_does_not_uplift():
     m2 = RickerPulse.dimensionless(A * 1.001, 2.0, ASYM.structure, "symmetric", 1)
     a, b = simulate_compiled(ASYM, m2).summary, simulate(ASYM, m2).summary
     assert a.uplifted and b.uplifted and a.t_uplift == pytest.approx(b.t_uplift, abs=1e-12)
+
+
+def test_eta_factor_is_mirrored():
+    """The reference's sensitivity hook eta x eta_factor (AnalyticSettings.eta_factor)."""
+    st = AnalyticSettings(history="minimal", eta_factor=0.99)
+    m = RickerPulse.dimensionless(2.5, 2.0, ASYM.structure, "antisymmetric", -1)
+    fast, ref = simulate_compiled(ASYM, m, settings=st), simulate(ASYM, m, settings=st)
+    assert_same_run(fast, ref, ASYM)
+    plain = simulate_compiled(ASYM, m, settings=MINIMAL).summary
+    assert (fast.summary.n_impacts, fast.summary.max_abs_phi) != (plain.n_impacts,
+                                                                  plain.max_abs_phi)
+    row = run_pulse_grid(ASYM, [("antisymmetric", -1, 2.5, 2.0)], eta_factor=0.99).iloc[0]
+    assert row["n_impacts"] == ref.summary.n_impacts
 
 
 def test_without_numba_the_module_says_so(monkeypatch):

@@ -1,0 +1,520 @@
+"""numba kernels of the compiled analytic path: the event-driven run of one case (:func:`_run`)
+and the loops over map cells. See :mod:`rockbench.analytic.compiled`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .kernels import numba, njit, prange  # noqa: F401
+from .kernels import (_NOUT, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _acc, _brent_core, _dense_eval, _devices, _fill_hist, _kinematics, _max_abs_after, _next_uplift, _phidd, _push_event, _rms2)
+
+
+@njit(cache=True)
+def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rtol, atol,
+         v_rest, thr_p, thr_n, motion_end, v_chat, dt_chat, min_adv, window, max_iter,
+         A, B, C, E3, E5, Dd, ns, want_ev, evf, evi, want_hist, tg, hist, hmode, out):
+    """One event-driven run of the SDOF model (solver.simulate's loop). Results go to ``out``
+    (layout _O_*), events to evf/evi, history samples to hist/hmode."""
+    hint = np.zeros(1, dtype=np.int64)
+    kin = np.zeros((3, 7))
+    K = np.zeros((A.shape[0], 2))
+    F = np.zeros((Dd.shape[0] + 3, 2))
+    yold = np.zeros(2)
+    ynew = np.zeros(2)
+    ytmp = np.zeros(2)
+    g_old = np.zeros(5)
+    g_new = np.zeros(5)
+    roots = np.zeros(5)
+    order = np.zeros(5, dtype=np.int64)
+    ntab = A.shape[0]
+    nint = Dd.shape[0] + 3
+    err_exp = -1.0 / 8.0
+    intact = sc[14] != 0.0
+    status = 0
+    overturned = False
+    t_over = np.nan
+    fractured = False
+    t_frac = np.nan
+    exceeded = False
+    max_abs = abs(phi0)
+    nimp = 0
+    nev = 0
+    steps = 0
+    nfev = 0
+    t_upl = np.nan
+    if phi0 != 0.0:
+        mode = 1 if phi0 > 0.0 else -1
+    elif phid0 != 0.0:
+        mode = 1 if phid0 > 0.0 else -1
+    else:
+        mode = 0
+    t = t0
+    phi = phi0
+    phid = phid0
+    n_iter = 0
+    recent = np.zeros(max(1, window))
+    has_last = False       # last impact of the current rocking episode (chatter rule)
+    last_t = 0.0
+    last_v = 0.0
+    adv = 0.0
+    while t < t_end and not overturned:
+        n_iter += 1
+        recent[(n_iter - 1) % window] = t
+        if n_iter >= window:
+            adv = t - recent[n_iter % window]
+            if adv < min_adv:
+                status = 2
+                break
+        if n_iter > max_iter:
+            status = 4
+            break
+        if mode == 0:
+            # the motion can no longer exceed either threshold: same outcome as a scan that
+            # finds no uplift before t_end (GroundMotion.max_abs_after), at no cost
+            if _max_abs_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint) <= min(thr_p, -thr_n):
+                tu, s = np.nan, 0
+            else:
+                tu, s = _next_uplift(t, t_end, mk, mp, rt, ra, hint, ext, thr_p, thr_n)
+            if s == 0:
+                t_stop = min(t_end, max(t, motion_end))
+                if want_hist:
+                    _fill_hist(tg, hist, hmode, hint, t, t_stop, F, yold, 0.0, 1.0, 0,
+                               intact, True)
+                t = t_stop
+                t_end = t_stop
+                break
+            if want_hist:
+                _fill_hist(tg, hist, hmode, hint, t, tu, F, yold, 0.0, 1.0, 0, intact, True)
+            if want_ev:
+                nev = _push_event(evf, evi, nev, tu, 0, 0.0, 0.0, 0.0, np.nan, s)
+            if np.isnan(t_upl):
+                t_upl = tu
+            t = tu
+            phi = 0.0
+            phid = 0.0
+            mode = s
+            has_last = False
+            continue
+
+        s = mode
+        gi = 0 if s == 1 else 1
+        g = geo[gi]
+        fall = sc[4 + gi]
+        frac = sc[6 + gi] if intact else np.inf
+        crit = sc[8 + gi] if intact else sc[10 + gi]
+        # a segment that starts at or beyond the critical angle of its potential exceeds it
+        if crit < np.inf and s * phi >= crit:
+            exceeded = True
+            if want_ev:
+                nev = _push_event(evf, evi, nev, t, 3, phi, phid, phid, np.nan, s)
+        nev_seg = nev
+        max_seg = max_abs
+        exc_seg = exceeded
+        # --- solve_ivp(DOP853) from (t, phi, phid) to t_end with the five events -------------
+        ya0 = phi
+        ya1 = phid
+        ag = _acc(t, mk, mp, rt, ra, hint)
+        f0 = ya1
+        f1 = _phidd(ya0, ya1, ag, g, intact, kin)
+        nfev += 1
+        # initial step (common.select_initial_step, order 7)
+        interval = abs(t_end - t)
+        s0 = atol + abs(ya0) * rtol
+        s1 = atol + abs(ya1) * rtol
+        d0 = _rms2(ya0, ya1, s0, s1)
+        d1 = _rms2(f0, f1, s0, s1)
+        if d0 < 1e-5 or d1 < 1e-5:
+            h0 = 1e-6
+        else:
+            h0 = 0.01 * d0 / d1
+        h0 = min(h0, interval)
+        y1a = ya0 + h0 * f0
+        y1b = ya1 + h0 * f1
+        fb0 = y1b
+        fb1 = _phidd(y1a, y1b, _acc(t + h0, mk, mp, rt, ra, hint), g, intact, kin)
+        nfev += 1
+        d2 = _rms2(fb0 - f0, fb1 - f1, s0, s1) / h0
+        if d1 <= 1e-15 and d2 <= 1e-15:
+            h1 = max(1e-6, h0 * 1e-3)
+        else:
+            h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+        h_abs = min(100.0 * h0, h1, interval)
+        # events at the start: impact, overturn, fracture, critical, peak
+        # impact (s phi falls to 0) and peak (s phi' falls to 0) are taken as positive at the
+        # segment's first instant, so that a root is never the start itself (solver.py)
+        g_old[0] = 1.0
+        g_old[1] = s * ya0 - fall
+        g_old[2] = s * ya0 - frac
+        g_old[3] = s * ya0 - crit
+        g_old[4] = 1.0
+        term_kind = -1
+        t_seg0 = t
+        while True:
+            # ---- one accepted step (RungeKutta._step_impl) ----
+            min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+            if h_abs < min_step:
+                h_abs = min_step
+            rejected = False
+            ok = False
+            while True:
+                if h_abs < min_step:
+                    break
+                h = h_abs
+                t_new = t + h
+                if t_new - t_end > 0.0:
+                    t_new = t_end
+                h = t_new - t
+                h_abs = abs(h)
+                K[0, 0] = f0
+                K[0, 1] = f1
+                for st in range(1, ns):
+                    dy0 = 0.0
+                    dy1 = 0.0
+                    for j in range(st):
+                        dy0 += K[j, 0] * A[st, j]
+                        dy1 += K[j, 1] * A[st, j]
+                    ytmp[0] = ya0 + dy0 * h
+                    ytmp[1] = ya1 + dy1 * h
+                    tt = t + C[st] * h
+                    K[st, 0] = ytmp[1]
+                    K[st, 1] = _phidd(ytmp[0], ytmp[1], _acc(tt, mk, mp, rt, ra, hint), g,
+                                      intact, kin)
+                s0b = 0.0
+                s1b = 0.0
+                for j in range(ns):
+                    s0b += K[j, 0] * B[j]
+                    s1b += K[j, 1] * B[j]
+                ynew[0] = ya0 + h * s0b
+                ynew[1] = ya1 + h * s1b
+                fn0 = ynew[1]
+                fn1 = _phidd(ynew[0], ynew[1], _acc(t + h, mk, mp, rt, ra, hint), g, intact,
+                             kin)
+                K[ns, 0] = fn0
+                K[ns, 1] = fn1
+                nfev += ns
+                sc0 = atol + max(abs(ya0), abs(ynew[0])) * rtol
+                sc1 = atol + max(abs(ya1), abs(ynew[1])) * rtol
+                e50 = 0.0
+                e51 = 0.0
+                e30 = 0.0
+                e31 = 0.0
+                for j in range(ns + 1):
+                    e50 += K[j, 0] * E5[j]
+                    e51 += K[j, 1] * E5[j]
+                    e30 += K[j, 0] * E3[j]
+                    e31 += K[j, 1] * E3[j]
+                e50 /= sc0
+                e51 /= sc1
+                e30 /= sc0
+                e31 /= sc1
+                n5 = e50 * e50 + e51 * e51
+                n3 = e30 * e30 + e31 * e31
+                if n5 == 0.0 and n3 == 0.0:
+                    err = 0.0
+                else:
+                    err = abs(h) * n5 / math.sqrt((n5 + 0.01 * n3) * 2.0)
+                if not (err == err):  # NaN: beyond the mechanism's reach
+                    h_abs *= 0.2
+                    rejected = True
+                    continue
+                if err < 1.0:
+                    if err == 0.0:
+                        factor = 10.0
+                    else:
+                        factor = min(10.0, 0.9 * err ** err_exp)
+                    if rejected:
+                        factor = min(1.0, factor)
+                    h_abs *= factor
+                    ok = True
+                    break
+                h_abs *= max(0.2, 0.9 * err ** err_exp)
+                rejected = True
+            if not ok:
+                status = 1
+                break
+            steps += 1
+            t_old = t
+            yold[0] = ya0
+            yold[1] = ya1
+            # ---- events ----
+            g_new[0] = s * ynew[0]
+            g_new[1] = s * ynew[0] - fall
+            g_new[2] = s * ynew[0] - frac
+            g_new[3] = s * ynew[0] - crit
+            g_new[4] = s * ynew[1]
+            nact = 0
+            for e in range(5):
+                d = -1 if (e == 0 or e == 4) else 1
+                up = g_old[e] <= 0.0 and g_new[e] >= 0.0
+                down = g_old[e] >= 0.0 and g_new[e] <= 0.0
+                if (up and d > 0) or (down and d < 0):
+                    order[nact] = e
+                    nact += 1
+            have_dense = False
+            need_h = False
+            if want_hist:
+                ih = np.searchsorted(tg, t_old, side="left")
+                need_h = ih < tg.shape[0] and tg[ih] <= t_new
+            if nact > 0 or need_h:
+                # dense output (DOP853._dense_output_impl): three extra stages
+                for st in range(ns + 1, ntab):
+                    dy0 = 0.0
+                    dy1 = 0.0
+                    for j in range(st):
+                        dy0 += K[j, 0] * A[st, j]
+                        dy1 += K[j, 1] * A[st, j]
+                    ytmp[0] = ya0 + dy0 * h
+                    ytmp[1] = ya1 + dy1 * h
+                    tt = t_old + C[st] * h
+                    K[st, 0] = ytmp[1]
+                    K[st, 1] = _phidd(ytmp[0], ytmp[1], _acc(tt, mk, mp, rt, ra, hint), g,
+                                      intact, kin)
+                nfev += ntab - ns - 1
+                for c in range(2):
+                    dlt = ynew[c] - yold[c]
+                    fo = K[0, c]
+                    fnew = fn0 if c == 0 else fn1
+                    F[0, c] = dlt
+                    F[1, c] = h * fo - dlt
+                    F[2, c] = 2.0 * dlt - h * (fnew + fo)
+                    for r in range(nint - 3):
+                        acc_ = 0.0
+                        for j in range(ntab):
+                            acc_ += Dd[r, j] * K[j, c]
+                        F[3 + r, c] = h * acc_
+                have_dense = True
+            t_stop = t_new
+            terminated = False
+            if nact > 0:
+                for q in range(nact):
+                    e = order[q]
+                    comp = 1 if e == 4 else 0
+                    if e == 0 or e == 4:
+                        mul = float(s)
+                        shift = 0.0
+                    else:
+                        mul = float(s)
+                        shift = fall if e == 1 else (frac if e == 2 else crit)
+                    # solve_ivp: brentq on the dense output, xtol = rtol = 4 machine epsilons
+                    roots[q] = _brent_core(t_old, t_new, g_old[e], g_new[e], 8.881784197001252e-16,
+                                           8.881784197001252e-16, 1, mk, mp, rt, ra, hint, F,
+                                           t_old, h, yold, comp, shift, mul)
+                # sort active events by root time (insertion sort, stable)
+                for q in range(1, nact):
+                    rq = roots[q]
+                    eq = order[q]
+                    p = q - 1
+                    while p >= 0 and roots[p] > rq:
+                        roots[p + 1] = roots[p]
+                        order[p + 1] = order[p]
+                        p -= 1
+                    roots[p + 1] = rq
+                    order[p + 1] = eq
+                last = nact
+                for q in range(nact):
+                    if order[q] <= 2:
+                        last = q + 1
+                        terminated = True
+                        break
+                for q in range(last):
+                    e = order[q]
+                    te = roots[q]
+                    if e == 3 or e == 4:
+                        pe = _dense_eval(F, yold, t_old, h, te, 0)
+                        pde = _dense_eval(F, yold, t_old, h, te, 1)
+                        if e == 4:
+                            if abs(pe) > max_abs:
+                                max_abs = abs(pe)
+                            if want_ev:
+                                nev = _push_event(evf, evi, nev, te, 2, pe, pde, pde, np.nan, s)
+                        else:
+                            exceeded = True
+                            if want_ev:
+                                nev = _push_event(evf, evi, nev, te, 3, pe, pde, pde, np.nan, s)
+                if terminated:
+                    term_kind = order[last - 1]
+                    t_stop = roots[last - 1]
+                    ynew[0] = _dense_eval(F, yold, t_old, h, t_stop, 0)
+                    ynew[1] = _dense_eval(F, yold, t_old, h, t_stop, 1)
+            if want_hist and have_dense:
+                _fill_hist(tg, hist, hmode, hint, t_old, t_stop, F, yold, t_old, h, s,
+                           intact, False)
+            if abs(ynew[0]) > max_abs:
+                max_abs = abs(ynew[0])
+            for e in range(5):
+                g_old[e] = g_new[e]
+            t = t_stop
+            ya0 = ynew[0]
+            ya1 = ynew[1]
+            f0 = fn0
+            f1 = fn1
+            if terminated or t >= t_end:
+                break
+        if status != 0:
+            # as the reference: the failed segment is not kept, the run ends at its start
+            t = t_seg0
+            nev = nev_seg
+            max_abs = max_seg
+            exceeded = exc_seg
+            break
+        phi = ya0
+        phid = ya1
+        if term_kind < 0:      # reached t_end
+            break
+        if term_kind == 0:     # impact
+            phi = 0.0
+            post = -s
+            eta = sc[2] if post == 1 else sc[3]
+            after = eta * phid
+            settles = eta <= 0.0 or abs(after) <= v_rest
+            # chatter (rules.py): two successive small post-impact velocities, close in time
+            if (not settles and has_last and abs(after) <= v_chat and last_v <= v_chat
+                    and t - last_t <= dt_chat):
+                settles = True
+            new_mode = 0 if settles else post
+            nimp += 1
+            if want_ev:
+                nev = _push_event(evf, evi, nev, t, 1, 0.0, phid, after, eta, new_mode)
+            if new_mode == 0:
+                if want_ev:
+                    nev = _push_event(evf, evi, nev, t, 6, 0.0, phid * eta, 0.0, np.nan, 0)
+                after = 0.0
+                has_last = False
+            else:
+                has_last = True
+                last_t = t
+                last_v = abs(after)
+            phid = after
+            mode = new_mode
+        elif term_kind == 1:   # overturn
+            overturned = True
+            t_over = t
+            if want_ev:
+                nev = _push_event(evf, evi, nev, t, 5, phi, phid, phid, np.nan, s)
+        else:                  # fracture
+            intact = False
+            fractured = True
+            t_frac = t
+            if want_ev:
+                nev = _push_event(evf, evi, nev, t, 4, phi, phid, phid, np.nan, s)
+    if want_ev and nev > evf.shape[0]:
+        status = 3
+    out[_O_STATUS] = status
+    out[_O_T] = t
+    out[_O_MAXABS] = max_abs
+    out[_O_OVER] = 1.0 if overturned else 0.0
+    out[_O_TOVER] = t_over
+    out[_O_EXC] = 1.0 if (exceeded or overturned) else 0.0
+    out[_O_UPL] = 1.0 if (not np.isnan(t_upl) or phi0 != 0.0 or phid0 != 0.0) else 0.0
+    out[_O_TUPL] = t_upl
+    out[_O_NIMP] = nimp
+    out[_O_FRAC] = 1.0 if fractured else 0.0
+    out[_O_TFRAC] = t_frac
+    out[_O_STEPS] = steps
+    out[_O_NFEV] = nfev
+    out[_O_NEV] = nev
+    out[_O_PHI] = phi
+    out[_O_PHID] = phid
+    out[_O_MODE] = mode
+    out[_O_INTACT] = 1.0 if intact else 0.0
+    out[_O_ADV] = adv
+
+
+# --- pulses built in the kernel (map cells) ------------------------------------------------------
+@njit(cache=True)
+def _pulse_setup(shape, sign, A, W, alpha, p, sym_ext, anti_ext, beta, xfac, mp, ext, extsuf):
+    """RickerPulse.dimensionless in compiled code: fills mp (scale, period, t_start, t_end,
+    xfac), the extrema and their suffix maxima; returns the number of extrema."""
+    amp = A * 9.81 * math.tan(alpha)
+    per = 2.0 * math.pi / (W * p)
+    if shape == 1:
+        mp[0] = sign * amp
+        taus = sym_ext
+    else:
+        mp[0] = sign * amp / beta
+        taus = anti_ext
+    mp[1] = per
+    mp[2] = -3.0 * per
+    mp[3] = 3.0 * per
+    mp[4] = xfac
+    n = taus.shape[0]
+    hint = np.zeros(1, dtype=np.int64)
+    dummy = np.zeros(1)
+    for i in range(n):
+        ext[i] = per * taus[i]
+    m = 0.0
+    for i in range(n - 1, -1, -1):
+        v = abs(_acc(ext[i], shape, mp, dummy, dummy, hint))
+        if v > m:
+            m = v
+        extsuf[i] = m
+    return n
+
+
+@njit(cache=True)
+def _grid_cell(i, geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p, thr_n,
+               rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res):
+    mp = np.zeros(5)
+    shape = shapes[i]
+    n_ext = 3 if shape == 1 else 4
+    ext = np.zeros(n_ext)
+    extsuf = np.zeros(n_ext)
+    _pulse_setup(shape, float(signs[i]), As[i], Ws[i], sc[12], sc[13], sym_ext, anti_ext, beta,
+                 xfac, mp, ext, extsuf)
+    t0 = mp[2]
+    dur = duration if duration > 0.0 else (mp[3] - mp[2]) + 10.0
+    dummy = np.zeros(1)
+    evf = np.zeros((1, 5))
+    evi = np.zeros((1, 2), dtype=np.int64)
+    tg = np.zeros(1)
+    hist = np.zeros((1, 2))
+    hmode = np.zeros((1, 2), dtype=np.int64)
+    out = np.zeros(_NOUT)
+    # max_abs_after short cut: no uplift possible at all -> the run is at rest throughout
+    _run(geo, sc, shape, mp, dummy, dummy, ext, extsuf, dummy, t0, t0 + dur, 0.0, 0.0, rtol,
+         atol, v_rest, thr_p, thr_n, mp[3], rp[0], rp[1], rp[2], int(rp[3]), int(rp[4]),
+         A, B, C, E3, E5, Dd, ns, False, evf, evi, False, tg, hist, hmode, out)
+    for k in range(_NOUT):
+        res[i, k] = out[k]
+
+
+@njit(cache=True)
+def _grid_serial(geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p, thr_n,
+                 rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res):
+    for i in range(shapes.shape[0]):
+        _grid_cell(i, geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p,
+                   thr_n, rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res)
+
+
+@njit(cache=True, parallel=True)
+def _grid_parallel(geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p, thr_n,
+                   rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res):
+    for i in prange(shapes.shape[0]):
+        _grid_cell(i, geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p,
+                   thr_n, rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res)
+
+
+@njit(cache=True)
+def _device_history(geo, sc, phi, mode, out):
+    """theta_beam, theta_right, elongations and damper chord rates per history sample."""
+    kin = np.zeros((3, 7))
+    for i in range(phi.shape[0]):
+        if mode[i] == 0:
+            continue
+        g = geo[0] if mode[i] == 1 else geo[1]
+        if _kinematics(phi[i], g, kin) < 3:
+            continue
+        el, er, dl, dr, cl, cr = _devices(kin, g[26])
+        out[i, 0] = kin[1, 4]
+        out[i, 1] = kin[2, 4]
+        out[i, 2] = el
+        out[i, 3] = er
+        out[i, 4] = cl
+        out[i, 5] = cr
+
+
+# ================================================================================================
+# Python entry points
+# ================================================================================================
