@@ -34,7 +34,6 @@ by a distance in units of alpha and relative to the nearest edge of the band.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 from dataclasses import dataclass
@@ -125,17 +124,13 @@ def perturbed_case(scene: Scene, motion, p: Perturbation) -> tuple[Scene, Any, f
 
 def _simulate(scene: Scene, motion, *, duration: float | None, phi0: float,
               eta_factor: float = 1.0, compiled: bool = True) -> Result:
-    """One analytic run (history "minimal"); the compiled path when it is importable and can
-    apply ``eta_factor``, the plain solver otherwise."""
+    """One analytic run (history "minimal", ``AnalyticSettings.eta_factor``): the compiled
+    path (which applies ``eta_factor`` as the plain solver does) when numba is importable and
+    ``compiled``, the plain solver otherwise."""
     from .analytic import solver
 
-    fields = {f.name for f in dataclasses.fields(solver.AnalyticSettings)}
-    has_hook = "eta_factor" in fields
-    kw: dict[str, Any] = {"history": "minimal"}
-    if has_hook:
-        kw["eta_factor"] = eta_factor
-    settings = solver.AnalyticSettings(**kw)
-    if compiled and (eta_factor == 1.0 or _compiled_has_hook()):
+    settings = solver.AnalyticSettings(history="minimal", eta_factor=eta_factor)
+    if compiled:
         try:
             from .analytic.compiled import NUMBA_AVAILABLE, simulate_compiled
             if NUMBA_AVAILABLE:
@@ -143,22 +138,8 @@ def _simulate(scene: Scene, motion, *, duration: float | None, phi0: float,
                                          settings=settings)
         except ImportError:
             pass
-    ref = reference_of(scene)
-    if eta_factor != 1.0 and not has_hook:
-        # no settings hook in this solver: the same run with a Reference whose eta is scaled
-        ref = copy.copy(ref)
-        ref.eta = {s: e * eta_factor for s, e in ref.eta.items()}
     return solver.simulate(scene, motion, duration=duration, phi0=phi0, settings=settings,
-                           reference=ref)
-
-
-def _compiled_has_hook() -> bool:
-    """Whether the compiled path applies ``AnalyticSettings.eta_factor``."""
-    try:
-        from .analytic import compiled
-    except ImportError:
-        return False
-    return bool(getattr(compiled, "ETA_FACTOR_SUPPORTED", False))
+                           reference=reference_of(scene))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -254,7 +235,8 @@ def band(scene: Scene, motion=None, *, duration: float | None = None, phi0: floa
     and one run per perturbation (``perturbations``, default :data:`PERTURBATIONS`; ``phase``
     is skipped unless ``motion`` is a Record, ``scale`` for free rocking). ``duration`` [s] and
     ``phi0`` [rad] as in :func:`rockbench.run` (use the case's). ``compiled`` uses the compiled
-    analytic path where it can (same answers, about 50 times faster on records)."""
+    analytic path when numba is present (same answers: ``tests/test_sensitivity.py``; about 50
+    times faster on records)."""
     if not isinstance(scene, Scene):
         raise ParameterError("scene", type(scene).__name__, "a rockbench Scene")
     perts = PERTURBATIONS if perturbations is None else tuple(perturbations)

@@ -152,3 +152,31 @@ def test_an_overturned_engine_is_judged_by_its_verdict():
     assert not b.judge(float(np.max(np.abs(h["phi"]))) / b.alpha).inside
     j = b.judge(over)
     assert j.inside and "overturned" in j.text
+
+
+def test_analytic_settings_eta_factor_is_validated_and_applied():
+    from rockbench.analytic.solver import AnalyticSettings, simulate
+
+    assert AnalyticSettings().eta_factor == 1.0
+    for bad in (0.0, -1.0, 2.5, float("nan")):
+        with pytest.raises(rb.ParameterError, match="eta_factor"):
+            AnalyticSettings(eta_factor=bad)
+    scene = rb.load_scene("paper-asymmetric")
+    s = AnalyticSettings(eta_factor=0.995)
+    r = simulate(scene, None, phi0=0.5 * scene.alpha, duration=3.0, settings=s)
+    imp = r.events[r.events["kind"] == "impact"]
+    ref = rb.info(scene)
+    for e, d in zip(imp["eta"], imp["direction"]):
+        if d in (1, -1):
+            assert e == pytest.approx(0.995 * ref["eta_ccw" if d == 1 else "eta_cw"], rel=1e-14)
+    assert r.settings["eta_factor"] == 0.995
+
+
+def test_compiled_band_equals_the_plain_one(scene, pulse, pulse_band):
+    """The band's fast path (compiled kernel, eta_factor included) gives the plain solver's
+    peaks."""
+    pytest.importorskip("numba")
+    plain = band(scene, pulse, compiled=False)
+    np.testing.assert_allclose(pulse_band.runs["peak_over_alpha"], plain.runs["peak_over_alpha"],
+                               rtol=1e-7)
+    assert list(pulse_band.runs["overturned"]) == list(plain.runs["overturned"])

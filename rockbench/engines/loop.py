@@ -340,8 +340,14 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     if free and dyn is not None:
         energy = lambda p: dyn[1 if p > 0 else -1].energy(p, 0.0)  # noqa: E731
         inertia0 = lambda s: dyn[s].terms(0.0).inertia  # noqa: E731
+    # impacts: the energy of successive peaks in free rocking; otherwise the mechanism's own
+    # equation of motion (device forces, ground motion) integrated from either side of each
+    # impact to phi = 0 (rockbench.measure, docs/metrics.md)
     imp = measure_impacts(tt, ph, pd_, alpha=alpha, free=free, energy=energy,
-                          inertia0=inertia0, uplift_tol=uplift_phi, rest_rate=rest_rate)
+                          inertia0=inertia0, uplift_tol=uplift_phi, rest_rate=rest_rate,
+                          dynamics=ref.dyn,
+                          ground_acc=motion.acceleration if motion is not None else None,
+                          intact=intact)
     if overturned:
         imp = [r for r in imp if r["t"] <= t_over]
     ev.extend(imp)
