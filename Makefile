@@ -25,6 +25,8 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/run.py
+	$(PY) benchmarks/loop_overhead.py
+	$(PY) benchmarks/compiled_analytic.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache build *.egg-info

@@ -33,8 +33,7 @@ ENGINE_AXES = dict(amplitude="1:8", frequency="1:10", pulses="all", tail=3.0)
 #: Grid per (engine speed class, scene) in the default report (``make report`` stays within
 #: its 10-minute budget on 2 cores); full=True (``rockbench report --full``): 12 x 12 x 4 for
 #: every engine on both scenes, kept in the store.
-ENGINE_GRIDS = {"fast": {"paper-asymmetric": (8, 8), "paper-asymmetric-hybrid-eps1": (4, 4)},
-                "slow": {"paper-asymmetric": (4, 4)}}
+ENGINE_GRIDS = {"fast": {"paper-asymmetric": (6, 6)}, "slow": {}}
 #: Engines fast enough for the larger default grids (real-time factor >= 20 through rockbench).
 FAST_ENGINES = ("pymunk", "mujoco")
 
