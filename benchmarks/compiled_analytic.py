@@ -23,10 +23,8 @@ once and excluded from every other figure.
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
 import multiprocessing as mp
 import os
-import platform
 import statistics
 import sys
 import time
@@ -44,29 +42,21 @@ _PACKAGED = (Path(__file__).resolve().parents[1] / "rockbench" / "records"
 RECORD = _PACKAGED if _PACKAGED.exists() else Path("/work/shared/records/IV1940_ElCentro_180.AT2")
 
 
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
 def machine() -> dict:
     import llvmlite
     import numba
     import scipy
-    return {"date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-            "cpu": _cpu_model(), "cores": os.cpu_count(),
-            "cores available": len(os.sched_getaffinity(0)),
-            "python": sys.version.split()[0], "numpy": np.__version__,
-            "scipy": scipy.__version__, "numba": numba.__version__,
-            "llvmlite": llvmlite.__version__, "numba threading layer": _threading_layer(),
-            "load average (1, 5, 15 min) at the end":
-                ", ".join(f"{x:.1f}" for x in os.getloadavg()),
-            "platform": platform.platform()}
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from run import machine as common
+
+    out = common()
+    out.update({"cores available": len(os.sched_getaffinity(0)), "numpy": np.__version__,
+                "scipy": scipy.__version__, "numba": numba.__version__,
+                "llvmlite": llvmlite.__version__, "numba threading layer": _threading_layer(),
+                "load average (1, 5, 15 min) at the end":
+                    ", ".join(f"{x:.1f}" for x in os.getloadavg())})
+    return out
 
 
 def _threading_layer() -> str:
