@@ -382,7 +382,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     t = time.perf_counter()
     from .campaign_maps import ANALYTIC_GRID, ENGINE_AXES, run_maps
 
-    maps = run_maps(names, store_dir / "maps", full=full, quick=quick, progress=progress,
+    maps = run_maps(names, store_dir / fingerprint / "maps", full=full, quick=quick,
+                    progress=progress,
                     workers=workers,
                     scheduler=dask_address if executor == "dask" else None)
     timings["maps"] = time.perf_counter() - t
