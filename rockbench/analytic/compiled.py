@@ -48,14 +48,14 @@ import functools
 import math
 import time
 from dataclasses import asdict
-from typing import Any, Iterable
+from typing import Iterable
 
 import numpy as np
 import pandas as pd
 
 from ..constants import G
 from ..errors import BackendUnavailable, ParameterError, check_positive
-from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
+from ..result import (Cost, Result, Summary, events_frame,
                       output_grid)
 from ..scene.motion import Record, RickerPulse
 from ..scene.scene import Scene
@@ -68,7 +68,7 @@ __all__ = ["NUMBA_AVAILABLE", "NUMBA_ERROR", "simulate_compiled", "run_pulse_gri
 
 from .kernels import NUMBA_AVAILABLE, NUMBA_ERROR, numba  # noqa: F401
 from .kernels import (_A, _ANTI_EXT, _B, _BETA, _C, _D, _E3, _E5, _EV_NAMES, _M_ANTI, _M_NONE, _M_REC, _M_SYM, _NGEO, _NOUT, _NS, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _REASONS, _SYM_EXT, _XFAC)
-from .kernel_run import (_device_history, _grid_parallel, _grid_serial, _run)
+from .kernel_run import (_grid_parallel, _grid_serial, _run)
 
 #: Columns of the frame returned by :func:`run_pulse_grid`, in order.
 MAP_COLUMNS = ("amplitude", "frequency", "pulse", "sign", "overturned", "exceeded_critical",
@@ -301,35 +301,14 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
 
 
 def _history(scene, geo, sc, mot, tg, phi, phid, mode, intact, settings) -> pd.DataFrame:
-    """The history frame (solver._history's columns), derived columns in compiled code."""
+    """The history frame: the solver's own column builder (one formula for both paths)."""
+    from .solver import history_frame
+
     acc = np.asarray(mot.acceleration(tg), dtype=float) if mot is not None else np.zeros_like(tg)
-    cols: dict[str, Any] = {"t": tg, "phi": phi, "phidot": phid, "ground_acc": acc,
-                            "mode": mode, "devices_intact": intact}
-    nan = np.full(tg.size, np.nan)
-    st = scene.structure
-    full = settings.history == "full"
-    if st.kind == "frame" and full:
-        d = np.zeros((tg.size, 6))
-        _device_history(geo, sc, np.ascontiguousarray(phi), np.ascontiguousarray(mode), d)
-        cols.update(theta_beam=d[:, 0], theta_right=d[:, 1])
-        dev = scene.devices if scene.has_devices else None
-        k = dev.tendon_stiffness if dev else 0.0
-        c = dev.damping if dev else 0.0
-        el, er, dl, dr = d[:, 2], d[:, 3], d[:, 4] * phid, d[:, 5] * phid
-        cols.update(tendon_elong_left=np.where(intact, el, 0.0) if dev else np.zeros_like(tg),
-                    tendon_elong_right=np.where(intact, er, 0.0) if dev else np.zeros_like(tg),
-                    tendon_force_left=np.where(intact, k * el, 0.0),
-                    tendon_force_right=np.where(intact, k * er, 0.0),
-                    damper_force_left=np.where(intact, c * dl, 0.0),
-                    damper_force_right=np.where(intact, c * dr, 0.0))
-    else:
-        for c in ("theta_beam", "theta_right", "tendon_elong_left", "tendon_elong_right",
-                  "tendon_force_left", "tendon_force_right", "damper_force_left",
-                  "damper_force_right"):
-            cols[c] = nan if (st.kind == "frame" or c.startswith("theta")) else np.zeros_like(tg)
-    for c in CONTACT_COLUMNS:
-        cols[c] = nan
-    return pd.DataFrame(cols, columns=list(HISTORY_COLUMNS) + list(CONTACT_COLUMNS))
+    return history_frame(reference_of(scene), tg, np.ascontiguousarray(phi, dtype=float),
+                         np.ascontiguousarray(phid, dtype=float),
+                         np.asarray(mode, dtype=np.int64), np.asarray(intact, dtype=bool), acc,
+                         settings.history == "full")
 
 
 def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = None,

@@ -495,8 +495,6 @@ def _grid_parallel(geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest,
         _grid_cell(i, geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p,
                    thr_n, rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res)
 
-
-@njit(cache=True)
 def _device_history(geo, sc, phi, mode, out):
     """theta_beam, theta_right, elongations and damper chord rates per history sample."""
     kin = np.zeros((3, 7))
@@ -513,8 +511,3 @@ def _device_history(geo, sc, phi, mode, out):
         out[i, 3] = er
         out[i, 4] = cl
         out[i, 5] = cr
-
-
-# ================================================================================================
-# Python entry points
-# ================================================================================================

@@ -401,14 +401,22 @@ def _history(ref: Reference, mot, segments, t0: float, t_end: float,
         if sol is not None:
             y = sol(tg[sl])
             phi[sl], phid[sl] = y[0], y[1]
-    if segments and segments[-1][3] == 0:
-        pass
-    cols: dict[str, Any] = {"t": tg, "phi": phi, "phidot": phid,
-                            "ground_acc": np.asarray(mot.acceleration(tg), dtype=float),
+    return history_frame(ref, tg, phi, phid, mode, intact,
+                         np.asarray(mot.acceleration(tg), dtype=float),
+                         settings.history == "full")
+
+
+def history_frame(ref: Reference, tg, phi, phid, mode, intact, ground_acc,
+                  full: bool) -> pd.DataFrame:
+    """The analytic history frame (HISTORY_COLUMNS, CONTACT_COLUMNS NaN) from the sampled
+    phi [rad], phidot [rad/s], mode, devices-intact flags and ground acceleration [m/s^2] on
+    the output grid ``tg`` [s]: the beam and right-column rotations and the device columns
+    (frames, ``full`` history) from the vectorized mechanism. Shared by both analytic paths.
+    """
+    cols: dict[str, Any] = {"t": tg, "phi": phi, "phidot": phid, "ground_acc": ground_acc,
                             "mode": mode, "devices_intact": intact}
     nan = np.full(tg.size, np.nan)
     st = ref.scene.structure
-    full = settings.history == "full"
     if st.kind == "frame" and full:
         # vectorized over the samples of each rocking direction; device columns only when the
         # scene has devices
