@@ -494,20 +494,3 @@ def _grid_parallel(geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest,
     for i in prange(shapes.shape[0]):
         _grid_cell(i, geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p,
                    thr_n, rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res)
-
-def _device_history(geo, sc, phi, mode, out):
-    """theta_beam, theta_right, elongations and damper chord rates per history sample."""
-    kin = np.zeros((3, 7))
-    for i in range(phi.shape[0]):
-        if mode[i] == 0:
-            continue
-        g = geo[0] if mode[i] == 1 else geo[1]
-        if _kinematics(phi[i], g, kin) < 3:
-            continue
-        el, er, dl, dr, cl, cr = _devices(kin, g[26])
-        out[i, 0] = kin[1, 4]
-        out[i, 1] = kin[2, 4]
-        out[i, 2] = el
-        out[i, 3] = er
-        out[i, 4] = cl
-        out[i, 5] = cr
