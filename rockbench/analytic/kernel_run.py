@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .kernels import numba, njit, prange  # noqa: F401
-from .kernels import (_NOUT, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _acc, _brent_core, _dense_eval, _devices, _fill_hist, _kinematics, _max_abs_after, _next_uplift, _phidd, _push_event, _rms2)
+from .kernels import (_NOUT, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _acc, _brent_core, _dense_eval, _fill_hist, _max_abs_after, _next_uplift, _phidd, _push_event, _rms2)
 
 
 @njit(cache=True)
