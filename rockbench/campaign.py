@@ -292,7 +292,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         (``dask_address``: a running scheduler; none: a local cluster).
     workers : worker processes (default: one per available core).
     full : the long campaign: every engine's overturning map at 12 x 12 x 4 on both map
-        scenes (:mod:`rockbench.campaign_maps`) and the stability sweep of every engine
+        scenes, measured into ``out_dir/engine-maps`` (:mod:`rockbench.campaign_maps`: the
+        default reuses those maps after re-running sample cells of each) and the stability sweep of every engine
         (:mod:`rockbench.campaign_choice`); the default keeps ``make report`` within its
         budget. Everything is kept in the store and reused.
     """
@@ -383,7 +384,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     from .campaign_maps import ANALYTIC_GRID, ENGINE_AXES, run_maps
 
     maps = run_maps(names, store_dir / fingerprint / "maps", full=full, quick=quick,
-                    progress=progress,
+                    measured=Path(out_dir) / "engine-maps", progress=progress,
                     workers=workers,
                     scheduler=dask_address if executor == "dask" else None)
     timings["maps"] = time.perf_counter() - t

@@ -30,8 +30,8 @@ import pandas as pd
 
 from .errors import ParameterError, RockbenchError
 
-__all__ = ["MAP_COLUMNS", "PULSES", "map_cells", "run_map", "load_map", "map_agreement",
-           "boundary"]
+__all__ = ["MAP_COLUMNS", "PULSES", "map_cells", "run_map", "load_map", "reuse_map",
+           "map_agreement", "boundary"]
 
 #: The pulses of a map: name -> (shape, sign).
 PULSES: dict[str, tuple[str, int]] = {"symmetric+": ("symmetric", 1),
@@ -116,13 +116,22 @@ def map_cells(*, grid: Any = (100, 100), amplitude: Any = (0.5, 8.0),
 # The store: a Parquet dataset folder with the inputs it was written for
 # ------------------------------------------------------------------------------------------
 def _inputs(scene, scene_ref: str, engine: str, settings: dict, method: str,
-            tail: float | None) -> dict[str, Any]:
+            tail: float | None, keyed_by_code: bool = True) -> dict[str, Any]:
+    """What a store was written for. ``keyed_by_code``: include rockbench's code fingerprint
+    (a store written by other code is refused); without it the store is keyed by the inputs
+    and the engine's version only, and its reuse must be verified by re-running sample cells
+    (:func:`verify_map`)."""
+    from .engines import engine_info
     from .sweep.store import code_fingerprint
 
-    return {"scene": scene.to_dict(), "scene_ref": scene_ref, "engine": engine,
-            "settings": {k: settings[k] for k in sorted(settings)}, "method": method,
-            "duration": f"pulse window (6 T_g) + {10.0 if tail is None else tail:g} s",
-            "code": code_fingerprint()}
+    out = {"scene": scene.to_dict(), "scene_ref": scene_ref, "engine": engine,
+           "engine_version": next((str(r.get("version", r.get("reason")))
+                                   for r in engine_info() if r["name"] == engine), ""),
+           "settings": {k: settings[k] for k in sorted(settings)}, "method": method,
+           "duration": f"pulse window (6 T_g) + {10.0 if tail is None else tail:g} s"}
+    if keyed_by_code:
+        out["code"] = code_fingerprint()
+    return out
 
 
 def _open_store(path: Path, inputs: dict[str, Any]) -> pd.DataFrame:
@@ -236,7 +245,8 @@ def run_map(scene: str, engine: str = "analytic", *, grid: Any = (100, 100),
             settings: dict | None = None, method: str | None = None,
             store: str | os.PathLike | None = None, workers: int | None = None,
             scheduler: str | None = None, progress: bool = True,
-            chunk: int | None = None, tail: float | None = None) -> pd.DataFrame:
+            chunk: int | None = None, tail: float | None = None,
+            keyed_by_code: bool = True) -> pd.DataFrame:
     """Run an overturning map of ``scene`` (a built-in name or a .toml path, with scene
     ``overrides``) with backend ``engine`` (and its ``settings`` overrides) and return it
     (:data:`MAP_COLUMNS`, sorted by pulse, sign, frequency, amplitude).
@@ -248,6 +258,9 @@ def run_map(scene: str, engine: str = "analytic", *, grid: Any = (100, 100),
     ``progress``: a tqdm bar with cells done, rate, time left and how many were reused.
     ``tail``: free rocking after the pulse window [s] (default None: 10 s, the package
     default); shorter tails are for quick looks and tests (a frame that falls later is missed).
+    ``keyed_by_code``: False keys the store by its inputs and the engine version only (not by
+    rockbench's code), for measured maps kept across code changes that are checked with
+    :func:`verify_map` before they are reused.
     """
     from .runner import resolve_engines
     from .scene.scene import load_scene
@@ -270,7 +283,8 @@ def run_map(scene: str, engine: str = "analytic", *, grid: Any = (100, 100),
     path = Path(store) if store is not None else None
     done = pd.DataFrame(columns=list(MAP_COLUMNS))
     if path is not None:
-        done = _open_store(path, _inputs(sc, str(scene), engine, settings, method or "", tail))
+        done = _open_store(path, _inputs(sc, str(scene), engine, settings, method or "", tail,
+                                        keyed_by_code))
     have = {(p, int(s), round(float(a), 9), round(float(w), 9))
             for p, s, a, w in zip(done["pulse"], done["sign"], done["amplitude"],
                                   done["frequency"])}
@@ -295,23 +309,11 @@ def run_map(scene: str, engine: str = "analytic", *, grid: Any = (100, 100),
                 progress=progress and bool(items),
                 desc=f"map {sc.name} analytic ({reused} reused)", unit="chunk")
     elif todo:
-        from .sweep import run_cases
-        cases = [{"scene": str(scene), "overrides": overrides or {}, "engine": engine,
-                  "settings": settings, "duration": _duration(sc, W, tail),
-                  "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W}}
-                 for sh, sg, A, W in todo]
         size = chunk or 64
-        for i in range(0, len(cases), size):
-            rows = run_cases(cases[i:i + size], executor=executor, workers=workers,
-                             dask_address=scheduler,
-                             progress=progress)
-            on_result("", pd.DataFrame({
-                "amplitude": rows["motion.A"], "frequency": rows["motion.W"],
-                "pulse": rows["motion.shape"], "sign": rows["motion.sign"],
-                "overturned": rows["overturned"], "exceeded_critical": rows["exceeded_critical"],
-                "max_abs_phi_over_alpha": rows["max_abs_phi_over_alpha"],
-                "n_impacts": rows["n_impacts"], "fractured": rows["fractured"],
-                "status": rows["status"], "wall_s": rows["wall_s"]}))
+        for i in range(0, len(todo), size):
+            on_result("", _engine_rows(str(scene), overrides, engine, settings, todo[i:i + size],
+                                       tail, executor=executor, workers=workers,
+                                       dask_address=scheduler, progress=progress))
     out = pd.concat([f for f in frames if len(f)], ignore_index=True) if any(
         len(f) for f in frames) else pd.DataFrame(columns=list(MAP_COLUMNS))
     out = _tidy(out).drop_duplicates(list(_KEY), keep="last")
@@ -322,6 +324,118 @@ def run_map(scene: str, engine: str = "analytic", *, grid: Any = (100, 100),
                                 ascending=[True, False, True, True]).reset_index(drop=True)
     out.attrs.update(scene=sc.name, engine=engine, method=method or "", reused=reused)
     return out
+
+
+def _engine_rows(scene_ref: str, overrides: dict | None, engine: str, settings: dict,
+                 cells: Sequence, tail: float | None, **execution) -> pd.DataFrame:
+    """Map rows of engine ``cells`` (shape, sign, A, W), run through
+    :func:`rockbench.sweep.run_cases` (MuJoCo batched) with ``execution`` options."""
+    from .scene.scene import load_scene
+    from .sweep import run_cases
+
+    sc = load_scene(scene_ref, overrides or None)
+    cases = [{"scene": scene_ref, "overrides": overrides or {}, "engine": engine,
+              "settings": settings, "duration": _duration(sc, W, tail),
+              "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W}}
+             for sh, sg, A, W in cells]
+    rows = run_cases(cases, **execution)
+    return pd.DataFrame({
+        "amplitude": rows["motion.A"], "frequency": rows["motion.W"],
+        "pulse": rows["motion.shape"], "sign": rows["motion.sign"],
+        "overturned": rows["overturned"], "exceeded_critical": rows["exceeded_critical"],
+        "max_abs_phi_over_alpha": rows["max_abs_phi_over_alpha"],
+        "n_impacts": rows["n_impacts"], "fractured": rows["fractured"],
+        "status": rows["status"], "wall_s": rows["wall_s"]})
+
+
+# ------------------------------------------------------------------------------------------
+# Reusing a measured map: verified by re-running sample cells
+# ------------------------------------------------------------------------------------------
+#: Relative tolerance on max |phi| / alpha when a stored cell is re-run (the engines are
+#: deterministic: the same wheel on the same kind of CPU reproduces a run bit for bit).
+VERIFY_RTOL = 1e-6
+
+
+def _check_cells(df: pd.DataFrame, n: int) -> pd.DataFrame:
+    """Up to ``n`` stored cells to re-run: short runs (the highest frequencies), one per pulse
+    and sign, alternately a survivor that rocked (the median rocking amplitude of the
+    survivors) and an overturning cell far from the boundary (the largest A)."""
+    top = df[df["frequency"] >= df["frequency"].quantile(0.66)]
+    picks = []
+    for i, ((_p, _s), g) in enumerate(top.groupby(["pulse", "sign"], sort=True)):
+        g = g[g["status"] == "ok"]
+        ot = g[g["overturned"].astype(bool)]
+        sv = g[~g["overturned"].astype(bool) & (g["max_abs_phi_over_alpha"] > 0.05)]
+        if i % 2 == 0 and len(sv):
+            sv = sv.sort_values("max_abs_phi_over_alpha")
+            picks.append(sv.iloc[len(sv) // 2])
+        elif len(ot):
+            picks.append(ot.sort_values(["amplitude", "frequency"]).iloc[-1])
+        elif len(g):
+            picks.append(g.iloc[len(g) // 2])
+        if len(picks) >= n:
+            break
+    return pd.DataFrame(picks).reset_index(drop=True)
+
+
+def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
+              amplitude: Any, frequency: Any, pulses: str | Sequence[str] = "all",
+              tail: float | None = None, check: int = 4,
+              rtol: float = VERIFY_RTOL) -> tuple[pd.DataFrame | None, str]:
+    """A measured map (a store written with ``keyed_by_code=False``) if it can be trusted on
+    this code and machine: written for the same scene, engine version, default settings and
+    run length, complete for the grid, and reproduced at ``check`` cells re-run now (verdicts,
+    status and impacts equal, max |phi| / alpha within ``rtol``). Returns (map, how it was
+    verified) or (None, why it is not reused)."""
+    path = Path(store)
+    meta = path / "_inputs.json"
+    if not meta.is_file():
+        return None, f"no measured map at {path}"
+    from .scene.scene import load_scene
+
+    sc = load_scene(scene)
+    want = _inputs(sc, str(scene), engine, {}, "", tail, keyed_by_code=False)
+    old = json.loads(meta.read_text())
+    diff = [k for k in want if old.get(k) != want[k]]
+    if diff:
+        return None, (f"the measured map {path.name} was written for other inputs "
+                      f"({', '.join(diff)} differ)")
+    cells = map_cells(grid=grid, amplitude=amplitude, frequency=frequency, pulses=pulses)
+    df = load_map(path)
+    keys = {(p, int(s), round(float(a), 9), round(float(w), 9))
+            for p, s, a, w in zip(df["pulse"], df["sign"], df["amplitude"], df["frequency"])}
+    missing = [c for c in cells if (c[0], c[1], round(c[2], 9), round(c[3], 9)) not in keys]
+    if missing:
+        return None, f"the measured map {path.name} lacks {len(missing)} of {len(cells)} cells"
+    df = _tidy(df)
+    keep = {(c[0], c[1], round(c[2], 9), round(c[3], 9)) for c in cells}
+    df = df[[(p, int(s), round(a, 9), round(w, 9)) in keep for p, s, a, w in
+             zip(df["pulse"], df["sign"], df["amplitude"], df["frequency"])]]
+    df = df.sort_values(["pulse", "sign", "frequency", "amplitude"],
+                        ascending=[True, False, True, True]).reset_index(drop=True)
+    picks = _check_cells(df, check)
+    now = _tidy(_engine_rows(str(scene), None, engine, {}, [
+        (r.pulse, int(r.sign), float(r.amplitude), float(r.frequency))
+        for r in picks.itertuples()], tail, executor="serial", progress=False))
+    m = picks.merge(now, on=list(_KEY), suffixes=("", "_now"))
+    worst = 0.0
+    for r in m.itertuples():
+        cell = (f"{r.pulse} {'+' if r.sign > 0 else '-'} A={r.amplitude:.4g} "
+                f"W={r.frequency:.4g}")
+        for c in ("status", "overturned", "exceeded_critical", "fractured", "n_impacts"):
+            if getattr(r, c) != getattr(r, c + "_now"):
+                return None, (f"the measured map {path.name} does not reproduce: at {cell} "
+                              f"{c} was {getattr(r, c)}, is {getattr(r, c + '_now')} now")
+        a, b = r.max_abs_phi_over_alpha, r.max_abs_phi_over_alpha_now
+        d = abs(a - b) / max(abs(a), 1e-12)
+        worst = max(worst, d)
+        if not d <= rtol:
+            return None, (f"the measured map {path.name} does not reproduce: at {cell} max "
+                          f"|phi|/alpha was {a:.9g}, is {b:.9g} now")
+    df.attrs.update(scene=sc.name, engine=engine, method="", reused=len(df))
+    return df, (f"measured earlier ({len(df)} cells, {want['engine_version']}), "
+                f"reproduced now at {len(m)} re-run cells (largest relative difference in "
+                f"max |phi|/alpha {worst:.1e})")
 
 
 def _crashed(cells, why: str) -> pd.DataFrame:

@@ -140,3 +140,50 @@ def test_map_command_line(tmp_path, capsys):
     assert main(["map", "--compare", str(store), str(store), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["kappa"] == 1.0
     assert main(["map", "paper-asymmetric", "--grid", "0x4"]) == 2
+
+
+def test_a_measured_map_is_reused_only_when_it_reproduces(tmp_path):
+    """``reuse_map``: a complete store written for the same inputs is reused after sample cells
+    re-run now reproduce it; a tampered, incomplete or foreign store is not (and says why)."""
+    from rockbench.maps import reuse_map
+
+    cells = dict(grid=(3, 2), amplitude="2:8", frequency="6:10", pulses="all", tail=0.5)
+    store = tmp_path / "m.parquet"
+    df = run_map("paper-asymmetric", "pymunk", store=store, keyed_by_code=False,
+                 progress=False, **cells)
+    got, why = reuse_map(store, "paper-asymmetric", "pymunk", **cells)
+    assert got is not None, why
+    assert "reproduced now at 4 re-run cells" in why
+    pd.testing.assert_frame_equal(got.drop(columns="wall_s"), df.drop(columns="wall_s"))
+    # another engine, another grid, other inputs
+    assert reuse_map(store, "paper-asymmetric", "mujoco", **cells)[0] is None
+    none, why = reuse_map(store, "paper-asymmetric", "pymunk", **dict(cells, grid=(4, 2)))
+    assert none is None and "lacks" in why
+    # a stored number that the engine does not reproduce
+    tampered = load_map(store)
+    tampered["max_abs_phi_over_alpha"] *= 1.001
+    for p in store.glob("part-*.parquet"):
+        p.unlink()
+    tampered.to_parquet(store / "part-0.parquet", index=False)
+    none, why = reuse_map(store, "paper-asymmetric", "pymunk", **cells)
+    assert none is None and "does not reproduce" in why and "max |phi|/alpha" in why
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("scene", ["paper-asymmetric", "paper-asymmetric-hybrid-eps1"])
+def test_the_committed_engine_maps_reproduce(engine, scene):
+    """The report's 12 x 12 x 4 engine maps (``reports/engine-maps``, measured by ``rockbench
+    report --full``) are reproduced by the current code at their sample cells; when this
+    fails, rerun ``rockbench report --full`` and commit the maps it measures."""
+    from pathlib import Path
+
+    from rockbench.campaign_maps import ENGINE_AXES, MEASURED_GRID
+    from rockbench.maps import reuse_map
+
+    root = Path(__file__).resolve().parents[1] / "reports" / "engine-maps"
+    path = root / f"{scene}_{engine}_{MEASURED_GRID[0]}x{MEASURED_GRID[1]}.parquet"
+    df, why = reuse_map(path, scene, engine, **dict(ENGINE_AXES, grid=MEASURED_GRID))
+    assert df is not None, why
+    assert len(df) == MEASURED_GRID[0] * MEASURED_GRID[1] * 4
+    assert (df["status"] == "ok").mean() >= 0.95

@@ -40,6 +40,12 @@ def maps_html(maps: Mapping[str, Any], figdir, *, analytic_grid: str, axes: str)
     if ag is not None and len(ag):
         parts.append("<h3>Every engine against the analytic map</h3><ul>"
                      + "".join(f"<li>{H.escape(w)}</li>" for w in maps["words"]) + "</ul>")
+        if maps.get("provenance"):
+            parts.append("<p>Where each engine map comes from (the 12 x 12 x 4 maps are "
+                         "measured by <code>rockbench report --full</code> and reused only when "
+                         "sample cells re-run now reproduce them):</p><ul>"
+                         + "".join(f"<li>{H.escape(w)}</li>" for w in maps["provenance"])
+                         + "</ul>")
         parts.append(H.html_table(ag, list(AGREEMENT_COLUMNS), units=AGREEMENT_COLUMNS,
                                   graded=False, scroll=True))
         for (scene, eng), df in maps["engine"].items():
