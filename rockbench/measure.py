@@ -83,7 +83,7 @@ def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha
                     guard: float = 0.01, window: float = 0.05, guard_rate: float = 0.004,
                     rate_window: float = 0.02,
                     rest_rate: float = 0.0, dynamics=None, ground_acc=None,
-                    intact=None) -> list[dict[str, Any]]:
+                    intact=None, closure=None) -> list[dict[str, Any]]:
     """Impacts (zero crossings of phi between uplifted excursions, see :func:`excursions`)
     with the effective coefficient of restitution measured from the sampled motion.
 
@@ -119,7 +119,8 @@ def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha
       direction (+1, -1) to an object with ``acceleration(phi, phidot, ground_acc,
       devices_intact)`` [rad/s^2] (``reference_of(scene).dyn``); ``ground_acc`` is a callable
       t [s] -> u_g'' [m/s^2] (None: no ground motion); ``intact`` the devices-intact flag per
-      sample (None: intact).
+      sample (None: intact). ``closure``: the same extrapolation compiled, for many samples
+      at once (:func:`rockbench.analytic.closure.closure_function`; None: Python).
 
     The crossing time is the zero of the fitted arc before the impact (the rigid-contact impact
     time, which a soft contact blurs), or the linear interpolation between the two samples
@@ -158,8 +159,10 @@ def measure_impacts(t: np.ndarray, phi: np.ndarray, phidot: np.ndarray, *, alpha
         wa = (tc + guard_rate, min(t[b.i1], tc + guard_rate + rate_window))
         use_energy = free and energy is not None and a.complete and b.complete
         if dynamics is not None and not use_energy:
-            vb = _eom_value(t, phi, phidot, wb, dynamics[a.sign], ground_acc, intact, +1.0)
-            va = _eom_value(t, phi, phidot, wa, dynamics[b.sign], ground_acc, intact, -1.0)
+            vb = _eom_value(t, phi, phidot, wb, dynamics[a.sign], ground_acc, intact, +1.0,
+                            closure, a.sign)
+            va = _eom_value(t, phi, phidot, wa, dynamics[b.sign], ground_acc, intact, -1.0,
+                            closure, b.sign)
         else:
             vb = _fit_value(t, phidot, wb[0], wb[1], tc)
             va = _fit_value(t, phidot, wa[0], wa[1], tc)
@@ -229,22 +232,32 @@ def extrapolate_to_closure(phi0: float, phidot0: float, t0: float, dynamics, *, 
     return math.nan, math.nan
 
 
-def _eom_value(t, phi, phidot, window, dyn, ground_acc, intact, direction) -> float:
+def _eom_value(t, phi, phidot, window, dyn, ground_acc, intact, direction, closure=None,
+               sign: int = 1) -> float:
     """Median over the samples of ``window`` = (ta, tb) [s] of phi' at closure, each sample
-    extrapolated with :func:`extrapolate_to_closure`; NaN without samples."""
+    extrapolated with :func:`extrapolate_to_closure` (or ``closure``, its compiled form for
+    the rocking direction ``sign``); NaN without samples."""
     ta, tb = window
     idx = np.flatnonzero((t >= ta) & (t <= tb))
     if idx.size > EOM_SAMPLES:                  # a few samples spread over the window suffice
         idx = idx[np.round(np.linspace(0, idx.size - 1, EOM_SAMPLES)).astype(int)]
-    vals = []
-    for i in idx:
-        ok = True if intact is None else bool(intact[i])
-        _, v = extrapolate_to_closure(float(phi[i]), float(phidot[i]), float(t[i]), dyn,
-                                      ground_acc=ground_acc, intact=ok, direction=direction,
-                                      max_time=(tb - ta) + 0.05)
-        if math.isfinite(v):
-            vals.append(v)
-    return float(np.median(vals)) if vals else math.nan
+    if not idx.size:
+        return math.nan
+    ok = np.ones(idx.size, bool) if intact is None else np.asarray(intact)[idx].astype(bool)
+    max_time = (tb - ta) + 0.05
+    if closure is not None:
+        _, v = closure(phi[idx], phidot[idx], t[idx], ok, np.full(idx.size, direction),
+                       np.full(idx.size, max_time), sign)
+        vals = v[np.isfinite(v)]
+    else:
+        vals = []
+        for i, flag in zip(idx, ok):
+            _, x = extrapolate_to_closure(float(phi[i]), float(phidot[i]), float(t[i]), dyn,
+                                          ground_acc=ground_acc, intact=bool(flag),
+                                          direction=direction, max_time=max_time)
+            if math.isfinite(x):
+                vals.append(x)
+    return float(np.median(vals)) if len(vals) else math.nan
 
 
 def _fit_value(t, y, ta, tb, tc) -> float:

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..analytic.closure import closure_function
 from ..analytic.reference import reference_of
 from ..constants import G
 from ..measure import excursions, measure_impacts
@@ -149,6 +150,14 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     try:
         backend._build()
         state = np.array(read(), dtype=float)
+        kernel = backend._compiled_loop()
+        if kernel is not None:
+            n = _drive(kernel, state=state, gx=np.asarray(gx, dtype=float),
+                       t_steps=np.asarray(t_steps, dtype=float), grid=grid, t0=t0,
+                       t_tol=t_tol, states=states, sample_intact=sample_intact,
+                       intact=intact, fall=(fall_p, fall_n), devices=devices,
+                       check_strain=check_strain, checker=checker, out=out, backend=backend)
+            raise _Done
         gridl = grid.tolist()
         prev_t, prev = None, None
         t = t0
@@ -205,7 +214,10 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
             t = t_steps[k]
             state = np.asarray(read(), dtype=float)      # a new array every step (contract)
         checker.check(states, sample_intact, grid, n, out)
+    except _Done:
+        pass
     except Diverged as e:
+        n = getattr(e, "samples", n)
         out.status, out.reason = "diverged", str(e)
     except Exception as e:  # engine failure at the adapter boundary
         out.status, out.reason = "diverged", f"{type(e).__name__}: {e}"
@@ -222,6 +234,58 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     out.max_penetration, out.max_sliding = checker.max_pen, checker.max_slide
     out.steps, out.wall_s = backend.steps, backend.wall_s
     return out
+
+
+class _Done(Exception):
+    """A compiled loop finished the run (leaves the Python loop)."""
+
+
+def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact, intact,
+           fall, devices, check_strain, checker, out, backend) -> int:
+    """Run a compiled stepping loop (``backend._compiled_loop()``, the protocol of
+    :func:`rockbench.engines.chipmunk.run_kernel`) to the end of the run, with the sample
+    checks between its calls; return the samples written. Raises :class:`Diverged` as the
+    Python loop does."""
+    from .chipmunk import LoopState as L
+    from .device_kernel import device_params
+
+    ls = np.zeros(L.SIZE)
+    ls[L.INTACT], ls[L.T] = 1.0 if intact else 0.0, t0
+    prev = np.zeros_like(state)
+    dev = device_params(devices) if devices is not None else np.zeros(0)
+    clock = time.perf_counter
+    n = 0
+    try:
+        while True:
+            ts = clock()
+            code = kernel(gx, t_steps, grid, t_tol, states, sample_intact, state, prev, ls,
+                          fall[0], fall[1], G, backend.settings.dt, dev, bool(check_strain),
+                          checker.checked + PROBE_CHUNK)
+            backend.wall_s += clock() - ts
+            backend.steps = int(ls[L.STEPS])
+            n = int(ls[L.N])
+            if code != 1:
+                break
+            checker.check(states, sample_intact, grid, n, out)
+        if ls[L.FRAC]:
+            t, phi, pd_ = ls[L.T_FRAC], ls[L.PHI_FRAC], ls[L.PD_FRAC]
+            out.fractured, out.t_fracture = True, float(t)
+            out.events.append(dict(t=float(t), kind="fracture", phi=float(phi),
+                                   phidot_before=float(pd_), phidot_after=float(pd_),
+                                   direction=1 if phi > 0 else -1))
+        if code == 3:
+            raise Diverged(f"non-finite body state at t={ls[L.T]:.6g} s")
+        if code == 2:
+            t, phi, pd_ = ls[L.T_OVER], ls[L.PHI_OVER], ls[L.PD_OVER]
+            out.overturned, out.t_overturn = True, float(t)
+            out.events.append(dict(t=float(t), kind="overturn", phi=float(phi),
+                                   phidot_before=float(pd_), phidot_after=float(pd_),
+                                   direction=1 if phi > 0 else -1))
+        checker.check(states, sample_intact, grid, n, out)
+    except Diverged as e:
+        e.samples = n
+        raise
+    return n
 
 
 class SampleChecks:
@@ -347,7 +411,7 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                           inertia0=inertia0, uplift_tol=uplift_phi, rest_rate=rest_rate,
                           dynamics=ref.dyn,
                           ground_acc=motion.acceleration if motion is not None else None,
-                          intact=intact)
+                          intact=intact, closure=closure_function(scene, motion))
     if overturned:
         imp = [r for r in imp if r["t"] <= t_over]
     ev.extend(imp)

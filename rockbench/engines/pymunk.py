@@ -48,6 +48,10 @@ class PymunkSettings(EngineSettings):
         :data:`~rockbench.engines.devices.DAMPER_MODELS` (default "distributed": the damper power
         taken from each body in proportion to its momentum; "couple" and "heel" make the
         hybrid frame slide by 4 cm to 1 m, see :class:`~rockbench.engines.devices.DeviceGeometry`).
+    loop : "compiled" (default: the stepping loop runs in numba, calling Chipmunk's C functions,
+        where :func:`rockbench.engines.chipmunk.available` says it can; otherwise Python) or
+        "python" (the Python loop: the plain path the compiled one is tested against). The
+        numbers are the same (``docs/engines/pymunk.md``).
 
     Inherited (:class:`~rockbench.engines.base.EngineSettings`): output_dt, uplift_tol,
     max_penetration, max_sliding, energy_gain_tol.
@@ -59,9 +63,12 @@ class PymunkSettings(EngineSettings):
     collision_slop: float = 3e-4
     collision_bias: float = (1.0 - 0.1) ** 60
     damper: str = "distributed"
+    loop: str = "compiled"
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if self.loop not in ("compiled", "python"):
+            raise ParameterError("loop", self.loop, "'compiled' or 'python'")
         if int(self.iterations) != self.iterations or self.iterations < 1:
             raise ParameterError("iterations", self.iterations, "an integer >= 1")
         if not (0.0 <= self.collision_slop < 0.01):
@@ -124,6 +131,23 @@ class PymunkBackend(EngineBackend):
         self._cbodies = [b._body for b in self._bodies]
         self._c = (lib.cpSpaceSetGravity, lib.cpSpaceStep, lib.cpBodyGetPosition,
                    lib.cpBodyGetAngle, lib.cpBodyGetVelocity, lib.cpBodyGetAngularVelocity)
+
+    def _compiled_loop(self):
+        if self.settings.loop != "compiled":
+            return None
+        from . import chipmunk
+
+        if not chipmunk.available()[0]:
+            return None
+        from pymunk._chipmunk_cffi import ffi
+
+        space = np.uint64(int(ffi.cast("uintptr_t", self._cspace)))
+        bodies = np.array([int(ffi.cast("uintptr_t", b)) for b in self._cbodies],
+                          dtype=np.uint64)
+
+        def loop(*args):
+            return chipmunk.run_kernel(space, bodies, *args)
+        return loop
 
     def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
         self._c[0](self._cspace, (gravity_x, -G))
