@@ -250,8 +250,8 @@ class EngineBackend(Backend):
 
     def _compiled_loop(self):
         """Optional: the whole stepping loop in compiled code for the world just built, a
-        callable with the protocol of :func:`rockbench.engines.chipmunk.run_kernel` minus its
-        first two arguments; None (the default) runs the Python loop of
+        callable with the protocol of :func:`rockbench.engines.compiled_loop.run_kernel`
+        minus its first two arguments; None (the default) runs the Python loop of
         :func:`~rockbench.engines.loop.step_run`. It must give the Python loop's numbers."""
         return None
 

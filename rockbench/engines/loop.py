@@ -243,10 +243,10 @@ class _Done(Exception):
 def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact, intact,
            fall, devices, check_strain, checker, out, backend) -> int:
     """Run a compiled stepping loop (``backend._compiled_loop()``, the protocol of
-    :func:`rockbench.engines.chipmunk.run_kernel`) to the end of the run, with the sample
+    :func:`rockbench.engines.compiled_loop.run_kernel`) to the end of the run, with the sample
     checks between its calls; return the samples written. Raises :class:`Diverged` as the
     Python loop does."""
-    from .chipmunk import LoopState as L
+    from .compiled_loop import LoopState as L
     from .device_kernel import device_params
 
     ls = np.zeros(L.SIZE)

@@ -139,14 +139,12 @@ class PymunkBackend(EngineBackend):
 
         if not chipmunk.available()[0]:
             return None
-        from pymunk._chipmunk_cffi import ffi
+        from .compiled_loop import CHIPMUNK, run_kernel
 
-        space = np.uint64(int(ffi.cast("uintptr_t", self._cspace)))
-        bodies = np.array([int(ffi.cast("uintptr_t", b)) for b in self._cbodies],
-                          dtype=np.uint64)
+        eng = chipmunk.engine(self._cspace, self._cbodies)
 
         def loop(*args):
-            return chipmunk.run_kernel(space, bodies, *args)
+            return run_kernel(CHIPMUNK, eng, *args)
         return loop
 
     def _step(self, gravity_x: float, forces: list[PointForce]) -> None:

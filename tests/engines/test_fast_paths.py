@@ -63,7 +63,7 @@ def test_minimal_history_equals_full_history_on_shared_columns(name, A, W, shape
     assert full.history["phi"].abs().max() > 0.1 * scene.alpha
 
 
-# --- pymunk: the compiled stepping loop against the Python loop ---------------------------
+# --- pymunk and MuJoCo: the compiled stepping loop against the Python loop ----------------
 _LOOP_CASES = [
     ("housner-block", dict(A=3.0, W=4.0, shape="symmetric", sign=1)),
     ("paper-asymmetric", dict(A=2.0, W=3.0, shape="symmetric", sign=1)),
@@ -74,16 +74,18 @@ _LOOP_CASES = [
 ]
 
 
+@pytest.mark.parametrize("engine", ["pymunk", "mujoco"])
 @pytest.mark.parametrize("name, pulse", _LOOP_CASES)
-def test_pymunk_compiled_loop_equals_the_python_loop(name, pulse):
+def test_compiled_loop_equals_the_python_loop(engine, name, pulse):
     """Bit for bit without devices; with devices to 1e-8 (rad, m, N relative): the tendon
     lengths come from the C library's hypot, one ulp from CPython's in 0.5 % of calls
     (rockbench.engines.device_kernel)."""
     from rockbench.engines import chipmunk
+    from rockbench.engines import mujoco as mj
 
-    if "pymunk" not in rb.available_backends():
-        pytest.skip("pymunk is not installed")
-    ok, why = chipmunk.available()
+    if engine not in rb.available_backends():
+        pytest.skip(f"{engine} is not installed")
+    ok, why = chipmunk.available() if engine == "pymunk" else mj.compiled_available()
     assert ok, why                       # the platforms CI runs on are all enabled
     scene = rb.load_scene(name)
     if pulse is None:
@@ -92,8 +94,8 @@ def test_pymunk_compiled_loop_equals_the_python_loop(name, pulse):
         motion = rb.RickerPulse.dimensionless(pulse["A"], pulse["W"], scene.structure,
                                               pulse["shape"], pulse["sign"])
         kw = {}
-    plain = rb.run(scene, motion, engine="pymunk", loop="python", **kw)
-    fast = rb.run(scene, motion, engine="pymunk", **kw)
+    plain = rb.run(scene, motion, engine=engine, loop="python", **kw)
+    fast = rb.run(scene, motion, engine=engine, **kw)
     assert fast.cost.steps == plain.cost.steps
     for col in ("status", "overturned", "fractured", "n_impacts", "exceeded_critical"):
         assert getattr(fast.summary, col) == getattr(plain.summary, col), col

@@ -70,10 +70,28 @@ def test_the_loop_computes_device_forces_only_for_a_scene_with_devices(engine, n
         return orig(self, gx, forces)
 
     monkeypatch.setattr(cls, "_step", spy)
-    r = rb.run(scene, pulse, engine=engine, duration=0.3)
+    python_loop = {"loop": "python"} if engine in ("pymunk", "mujoco") else {}
+    r = rb.run(scene, pulse, engine=engine, duration=0.3, **python_loop)
     assert r.ok
     native = getattr(r.settings, "get", lambda *_: None)("devices") == "native"
     if not devices:
         assert calls["forces"] == 0 and max(seen) == 0
     elif not native:
         assert calls["forces"] > 0 and max(seen) > 0
+
+
+@pytest.mark.parametrize("engine", [e for e in ENGINES if e in ("pymunk", "mujoco")])
+@pytest.mark.parametrize("name, devices", [("paper-asymmetric", False),
+                                           ("paper-asymmetric-hybrid", True)])
+def test_the_compiled_loop_gets_device_parameters_only_for_a_scene_with_devices(
+        engine, name, devices, monkeypatch):
+    from rockbench.engines import device_kernel as K
+
+    calls = []
+    real = K.device_params
+    monkeypatch.setattr(K, "device_params", lambda d: calls.append(d) or real(d))
+    scene = rb.load_scene(name)
+    pulse = rb.RickerPulse.dimensionless(3.0, 4.0, scene.structure, "symmetric", 1)
+    r = rb.run(scene, pulse, engine=engine, duration=0.3)
+    assert r.ok and r.cost.steps > 0
+    assert len(calls) == (1 if devices else 0)
