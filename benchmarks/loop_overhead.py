@@ -5,11 +5,15 @@
 For each engine and case, in process CPU time (``time.process_time``, so another process's load
 does not enter) per simulated second, median of ``--repeat`` runs with min-max spread:
 
-* ``raw``: the engine's own stepping - the adapter built once, then a bare loop over its step
-  call with the ground motion's gravity precomputed (no state read, no devices, no sampling);
+* ``raw``: the engine's own stepping - the adapter built once, then a bare Python loop over its
+  step call with the ground motion's gravity precomputed (no state read, no devices, no
+  sampling);
+* ``raw C`` (pymunk, MuJoCo): the same bare loop compiled (numba, the engine's C step function
+  called by address): what the engine itself costs, without any Python per step;
 * ``rockbench``: the whole ``rb.run`` (building, stepping, devices, sampling, diagnostics, the
-  Result);
-* ``ratio`` = rockbench / raw.
+  Result) at its defaults (pymunk and MuJoCo: the compiled loop), and ``rockbench, Python
+  loop`` (``loop="python"``);
+* ``ratio`` = rockbench / raw, and rockbench / raw C.
 
 Plus MuJoCo plain stepping against the batched ``mujoco.rollout`` path per map cell, and the
 analytic run with full and minimal history. Writes ``loop_overhead.md`` with the machine.
@@ -34,7 +38,9 @@ from run import machine  # noqa: E402
 
 
 def cpu(fn, repeat: int) -> tuple[float, float, float]:
-    """(median, min, max) process CPU seconds of ``fn()`` over ``repeat`` calls."""
+    """(median, min, max) process CPU seconds of ``fn()`` over ``repeat`` calls, after one
+    untimed call (numba compilation or cache loading, imports)."""
+    fn()
     xs = []
     for _ in range(repeat):
         c = time.process_time()
@@ -62,6 +68,46 @@ def raw_stepping(engine: str, scene, motion, duration: float):
     return go
 
 
+def raw_c_stepping(engine: str, scene, motion, duration: float):
+    """The bare loop of :func:`raw_stepping` compiled: gravity and step, by address."""
+    from numba import njit
+
+    from rockbench.engines.compiled_loop import _call_pd, _call_pdd, _call_pp
+
+    @njit
+    def chipmunk(fp, space, gx, g, dt):
+        for k in range(gx.shape[0]):
+            _call_pdd(fp[0], space, gx[k], -g)
+            _call_pd(fp[1], space, dt)
+
+    @njit
+    def mujoco(step, model, data, gravity, gx):
+        for k in range(gx.shape[0]):
+            gravity[0] = gx[k]
+            _call_pp(step, model, data)
+
+    cls = get_backend(engine)
+
+    def go():
+        b = cls(scene)
+        t0, t_end = run_window(scene, motion, duration, 0.0)
+        dt = b.settings.dt
+        n = int(round((t_end - t0) / dt))
+        t = t0 + dt * (np.arange(n) + 0.5)
+        gx = -np.asarray(motion.acceleration(t), dtype=float)
+        b.build(0.0)
+        if engine == "pymunk":
+            from rockbench.engines.chipmunk import engine as eng_of
+            eng = eng_of(b._cspace, b._cbodies)
+            chipmunk(eng[0], eng[1][0], gx, 9.81, dt)
+        else:
+            from rockbench.engines.mujoco import _mj_step_address
+            mujoco(np.uint64(_mj_step_address()), np.uint64(b.model._address),
+                   np.uint64(b.data._address), b.model.opt.gravity, gx)
+        b._close()
+    return go
+
+
 def cases():
     asym = rb.load_scene("paper-asymmetric")
     hyb = rb.load_scene("paper-asymmetric-hybrid")
@@ -77,18 +123,29 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = ap.parse_args(argv)
     engines = [e for e in rb.available_backends() if e != "analytic"]
-    lines = ["| case | engine | raw CPU s / sim s | rockbench CPU s / sim s | ratio | raw RTF | "
-             "rockbench RTF |", "|---|---|---|---|---|---|---|"]
+    lines = ["| case | engine | raw CPU s / sim s | raw C CPU s / sim s | rockbench CPU s / "
+             "sim s | ratio to raw | ratio to raw C | rockbench, Python loop | raw RTF | "
+             "rockbench RTF |", "|---|---|---|---|---|---|---|---|---|---|"]
+    fmt = lambda c, d: f"{c[0] / d:.4g} ({c[1] / d:.3g}-{c[2] / d:.3g})"  # noqa: E731
     for label, scene, motion, duration in cases():
         for eng in engines:
+            compiled = eng in ("pymunk", "mujoco")
             raw = cpu(raw_stepping(eng, scene, motion, duration), args.repeat)
+            rawc = (cpu(raw_c_stepping(eng, scene, motion, duration), args.repeat)
+                    if compiled else None)
             whole = cpu(lambda: rb.run(scene, motion, engine=eng, duration=duration),
                         args.repeat)
+            plain = (cpu(lambda: rb.run(scene, motion, engine=eng, duration=duration,
+                                        loop="python"), args.repeat) if compiled else None)
             r, w = raw[0] / duration, whole[0] / duration
-            lines.append(f"| {label} | {eng} | {r:.4g} ({raw[1] / duration:.3g}-"
-                         f"{raw[2] / duration:.3g}) | {w:.4g} ({whole[1] / duration:.3g}-"
-                         f"{whole[2] / duration:.3g}) | {w / r:.3g} | {1 / r:.4g} | "
-                         f"{1 / w:.4g} |")
+            lines.append(
+                f"| {label} | {eng} | {fmt(raw, duration)} | "
+                f"{fmt(rawc, duration) if rawc else '-'} | {fmt(whole, duration)} | "
+                f"{w / r:.3g} | {whole[0] / rawc[0]:.3g} | " if rawc else
+                f"| {label} | {eng} | {fmt(raw, duration)} | - | {fmt(whole, duration)} | "
+                f"{w / r:.3g} | - | ")
+            lines[-1] += (f"{fmt(plain, duration)} | " if plain else "- | ") + \
+                f"{1 / r:.4g} | {1 / w:.4g} |"
             print(lines[-1], flush=True)
     # MuJoCo: plain stepping against the batched rollout path, per map cell
     if "mujoco" in engines:
@@ -105,12 +162,20 @@ def main(argv=None) -> int:
         n = len(chunk)
 
         def timed(fn):
-            w = time.perf_counter()
-            c = cpu(fn, max(1, args.repeat // 2))
-            return c, (time.perf_counter() - w) / max(1, args.repeat // 2)
+            """((median, min, max) CPU s, median wall s) over the repeats, after a warm-up."""
+            fn()
+            cs, ws = [], []
+            for _ in range(max(1, args.repeat // 2)):
+                w, c = time.perf_counter(), time.process_time()
+                fn()
+                cs.append(time.process_time() - c)
+                ws.append(time.perf_counter() - w)
+            return (statistics.median(cs), min(cs), max(cs)), statistics.median(ws)
 
-        plain = timed(lambda: [rb.run(sc, m, engine="mujoco") for m in chunk])
-        rows = [("plain stepping (rb.run per cell)", plain)]
+        plain = timed(lambda: [rb.run(sc, m, engine="mujoco", loop="python") for m in chunk])
+        rows = [("plain stepping, Python loop (rb.run per cell, loop='python')", plain),
+                ("plain stepping, compiled loop (rb.run per cell, the default)",
+                 timed(lambda: [rb.run(sc, m, engine="mujoco") for m in chunk]))]
         for nt in (1, 2):
             rows.append((f"batched, mujoco.rollout, {nt} thread{'s' if nt > 1 else ''}",
                          timed(lambda nt=nt: run_batch(sc, chunk, nthread=nt))))

@@ -293,9 +293,10 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     workers : worker processes (default: one per available core).
     full : the long campaign: every engine's overturning map at 12 x 12 x 4 on both map
         scenes, measured into ``out_dir/engine-maps`` (:mod:`rockbench.campaign_maps`: the
-        default reuses those maps after re-running sample cells of each) and the stability sweep of every engine
-        (:mod:`rockbench.campaign_choice`); the default keeps ``make report`` within its
-        budget. Everything is kept in the store and reused.
+        default reuses those maps after re-running sample cells of each) and the full form of
+        the stability sweep of every engine (:mod:`rockbench.campaign_choice`; the default runs
+        its fast form); the default keeps ``make report`` within its budget. Everything is
+        kept in the store and reused.
     """
     from .engines import available_backends
 

@@ -20,11 +20,13 @@ def choice_html(choice: Mapping[str, Any], figdir) -> str:
     if tab is not None and len(tab):
         parts.append(H.figure_html(
             plot_work_precision(tab),
-            "Work-precision on paper-asymmetric (reduced validation set: free rocking, pulses "
-            "that the frame survives and that overturn it): worst error against the analytic "
+            "Work-precision on paper-asymmetric (the validation set: free rocking from two "
+            "amplitudes in both directions, pulses that the frame survives, near and far "
+            "from the boundary, and pulses that overturn it): worst error against the analytic "
             "model [-] against the cost in process CPU seconds per simulated second [-], one "
             "curve per engine over its time steps, Pareto front marked. The full sweeps: "
-            "docs/choosing.md.", name="work_precision", png_dir=figdir))
+            "docs/choosing.md (self-consistency at dt / 4, more time steps, repeats).",
+            name="work_precision", png_dir=figdir))
         adv = choice["advice"]
         if len(adv):
             parts.append("<h3>The cheapest setting of each engine within 2 % and 0.2 %</h3>"
@@ -35,6 +37,8 @@ def choice_html(choice: Mapping[str, Any], figdir) -> str:
             parts.append(H.figure_html(
                 plot_stability_map(st, eng), f"{eng}: where it stays within 1 % and 5 % of "
                 "the analytic model, where it breaks, and where the analytic model itself stops "
-                "applying, one axis at a time from the paper's frame (fast form of rockbench "
-                "stress).", name=f"stability_{eng}", png_dir=figdir))
+                "applying, one axis at a time from the paper's frame (rockbench stress, "
+                + ("full form" if choice.get("stress_full") else "fast form; the full form: "
+                   "rockbench report --full or rockbench stress --full") + ").",
+                name=f"stability_{eng}", png_dir=figdir))
     return "\n".join(parts) or "<p>No engine besides the analytic reference.</p>"
