@@ -105,6 +105,51 @@ def chunk_rate(scene, cells, repeat_ref, repeat_fast):
     return ref_rates, fast_rates, drop_rates
 
 
+# --- 1b. every engine on one chunk of the report's engine map -----------------------------------
+def engine_chunk_lines(quick: bool) -> list[str]:
+    """Cells per CPU second of each backend at its default settings on 16 cells of the
+    report's engine map (paper-asymmetric, A 1..8, W 1..10, pulse window + 3 s), through the
+    path maps use (:func:`rockbench.maps._engine_rows`: MuJoCo batched in rollout), in this
+    process; the analytic model's compiled path on the same cells for scale."""
+    import rockbench as rb
+    from rockbench.campaign_maps import ENGINE_AXES
+    from rockbench.maps import _engine_rows, map_cells
+
+    cells = map_cells(grid=(12, 12), amplitude=ENGINE_AXES["amplitude"],
+                      frequency=ENGINE_AXES["frequency"])
+    rng = np.random.default_rng(5)
+    chunk = [cells[i] for i in rng.choice(len(cells), 4 if quick else 16, replace=False)]
+    out = [f"## Every backend on one chunk of the report's engine map ({len(chunk)} cells)", "",
+           "paper-asymmetric, cells drawn (seed 5) from the 12 x 12 x 4 grid of the report's "
+           "engine maps (A 1..8, W 1..10, pulse window + 3 s), default settings, one process, "
+           "the path `rockbench map` uses (MuJoCo batched in `mujoco.rollout`); process CPU "
+           "time, after one untimed pass.", "",
+           "| backend | cells per CPU second | CPU s per cell |", "|:--|--:|--:|"]
+    for eng in rb.available_backends():
+        if eng == "analytic":
+            def go():
+                scene = load_scene("paper-asymmetric")
+                by_w = {}
+                for c in chunk:
+                    by_w.setdefault(c[3], []).append(c)
+                from rockbench.maps import _duration
+                for w, cs in by_w.items():
+                    run_pulse_grid(scene, cs, duration=_duration(scene, w, ENGINE_AXES["tail"]))
+        else:
+            def go(eng=eng):
+                _engine_rows("paper-asymmetric", None, eng, {}, chunk, ENGINE_AXES["tail"],
+                             executor="serial", progress=False)
+        go()
+        rates = []
+        for _ in range(1 if quick or eng in ("pybullet", "opensees") else 3):
+            c0 = time.process_time()
+            go()
+            rates.append(len(chunk) / (time.process_time() - c0))
+        out.append(f"| {eng} | {fmt(rates)} | {1 / stats(rates)[0]:.3g} |")
+        print(out[-1], flush=True)
+    return out + [""]
+
+
 # --- 2. the full map -----------------------------------------------------------------------------
 def _worker(args):
     name, cells = args
@@ -205,6 +250,9 @@ def main(argv=None) -> int:
               f"{1e3 / stats(fast_r)[0]:.3g} |",
               "", f"Speed-up of the batch path over the reference: "
               f"{stats(fast_r)[0] / stats(ref_r)[0]:.0f} x.", ""]
+
+    # 1b. every engine on one chunk of the report's engine map
+    lines += engine_chunk_lines(quick)
 
     # 2. full map
     ctx = mp.get_context("spawn")
