@@ -255,6 +255,14 @@ def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact
     dev = device_params(devices) if devices is not None else np.zeros(0)
     clock = time.perf_counter
     n = 0
+
+    def fracture() -> None:          # the fracture event, as the Python loop records it
+        if ls[L.FRAC] and not out.fractured:
+            t, phi, pd_ = ls[L.T_FRAC], ls[L.PHI_FRAC], ls[L.PD_FRAC]
+            out.fractured, out.t_fracture = True, float(t)
+            out.events.append(dict(t=float(t), kind="fracture", phi=float(phi),
+                                   phidot_before=float(pd_), phidot_after=float(pd_),
+                                   direction=1 if phi > 0 else -1))
     try:
         while True:
             ts = clock()
@@ -266,13 +274,9 @@ def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact
             n = int(ls[L.N])
             if code != 1:
                 break
+            fracture()
             checker.check(states, sample_intact, grid, n, out)
-        if ls[L.FRAC]:
-            t, phi, pd_ = ls[L.T_FRAC], ls[L.PHI_FRAC], ls[L.PD_FRAC]
-            out.fractured, out.t_fracture = True, float(t)
-            out.events.append(dict(t=float(t), kind="fracture", phi=float(phi),
-                                   phidot_before=float(pd_), phidot_after=float(pd_),
-                                   direction=1 if phi > 0 else -1))
+        fracture()
         if code == 3:
             raise Diverged(f"non-finite body state at t={ls[L.T]:.6g} s")
         if code == 2:
