@@ -66,6 +66,8 @@ class Stepped:
     events : overturn and fracture events found while stepping (dicts of EVENT_COLUMNS);
     status, reason : "ok" or "diverged" and why (online checks, engine exceptions);
     max_penetration, max_sliding : online contact maxima [m] before the structure falls;
+    contact : (penetration, sliding, opened) per sample as the checks measured them, when they
+        measured every sample (else None: :func:`finish` measures them);
     steps, wall_s : engine steps and seconds spent inside the engine's step call.
     """
 
@@ -73,6 +75,7 @@ class Stepped:
     states: np.ndarray
     intact: np.ndarray
     native_report: list | None = None
+    contact: tuple | None = None
     events: list[dict[str, Any]] = field(default_factory=list)
     status: str = "ok"
     reason: str | None = None
@@ -232,6 +235,8 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     out.intact = sample_intact[:n]
     out.native_report = native_report[:n] if native else None
     out.max_penetration, out.max_sliding = checker.max_pen, checker.max_slide
+    if checker.checked >= n and checker.contact is not None:
+        out.contact = tuple(a[:n] for a in checker.contact)
     out.steps, out.wall_s = backend.steps, backend.wall_s
     return out
 
@@ -311,6 +316,7 @@ class SampleChecks:
         self.energy0 = None
         self.max_pen = self.max_slide = 0.0
         self.stop_at = None
+        self.contact = None            # (pen, sl, opened) per sample, filled as checked
 
     def _fail(self, i: int, message: str):
         self.stop_at = i
@@ -340,7 +346,12 @@ class SampleChecks:
                                       f"(t={grid[start + i]:.4g} s)")
         ph = S[:, 0, 2]
         modes = np.where(np.abs(ph) <= self.uplift_phi, 0, np.sign(ph))
-        pen, sl, _ = self.probe.measure_many(S, modes)
+        pen, sl, op = self.probe.measure_many(S, modes)
+        if self.contact is None:
+            size = states.shape[0]
+            self.contact = (np.zeros(size), np.zeros(size), np.zeros(size, dtype=bool))
+        for whole, part in zip(self.contact, (pen, sl, op)):
+            whole[start:n] = part
         falling = _falling(ph, intact[start:n], self.crit)
         self.max_pen = max(self.max_pen, float(pen[~falling].max(initial=0.0)))
         self.max_slide = max(self.max_slide, float(sl[~falling].max(initial=0.0)))
@@ -374,8 +385,10 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     status, reason = stepped.status, stepped.reason
     overturned, t_over = stepped.overturned, stepped.t_overturn
     modes = np.where(np.abs(ph) <= uplift_phi, 0, np.sign(ph)).astype(np.int64)
-    probe = ContactProbe(scene, specs)
-    pen, sl, op = probe.measure_many(S, modes)
+    if stepped.contact is not None and len(stepped.contact[0]) == n:
+        pen, sl, op = stepped.contact
+    else:
+        pen, sl, op = ContactProbe(scene, specs).measure_many(S, modes)
     falling = _falling(ph, intact, crit)
     # contact violations while the structure is past its critical angle do not make a run
     # diverged if it goes on to overturn (an engine's falling bodies may slide or sink: the
