@@ -64,8 +64,19 @@ def recommendation(advice: pd.DataFrame) -> list[str]:
                     f"(worst error {100 * b['worst_error']:.2f} %, "
                     f"{b['cpu_per_sim_s']:.3g} CPU s per simulated s, real-time factor "
                     f"{b['real_time_factor']:.3g})")
+            from .advise import TIE
+
+            tied = [r for _, r in meets.iloc[1:].iterrows()
+                    if r["cpu_per_sim_s"] <= TIE * b["cpu_per_sim_s"]]
+            if tied:
+                safest = min([b] + tied, key=lambda r: r["worst_error"])
+                text += (f". A tie on cost with {', '.join(r['engine'] for r in tied)} (within "
+                         f"{100 * (TIE - 1):.0f} %, which CPU time moves between measurements "
+                         f"on a shared machine): of these, {safest['engine']} "
+                         f"({safest['setting']}) has the largest margin, worst error "
+                         f"{100 * safest['worst_error']:.2f} %")
             if len(meets) > 1:
-                text += "; then " + ", ".join(
+                text += "; in order of cost: " + ", ".join(
                     f"{r['engine']} ({r['setting']}, {100 * r['worst_error']:.2f} %, "
                     f"{r['cpu_per_sim_s']:.3g} CPU s/s)" for _, r in meets.iloc[1:].iterrows())
             lines.append(text + ".")

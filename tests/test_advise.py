@@ -137,3 +137,23 @@ def test_cli_advise_paper_asymmetric_quick(capsys):
     j = json.loads(capsys.readouterr().out)
     assert set(j["considered"]) == set(REGISTRY) - {"analytic"}
     assert {r["engine"] for r in j["ranking"]} == set(j["considered"])
+
+
+def test_the_report_headline_names_a_cost_tie_and_the_larger_margin():
+    import pandas as pd
+
+    from rockbench.campaign_choice import recommendation
+
+    def frame(cost_b):
+        return pd.DataFrame([
+            dict(tolerance=0.02, rank=1, engine="a", status="meets", setting="dt=0.0005",
+                 dt=5e-4, worst_error=0.0168, cpu_per_sim_s=0.0127, real_time_factor=78.5,
+                 reason=""),
+            dict(tolerance=0.02, rank=2, engine="b", status="meets", setting="dt=0.001",
+                 dt=1e-3, worst_error=0.0057, cpu_per_sim_s=cost_b,
+                 real_time_factor=1 / cost_b, reason="")])
+    tie = recommendation(frame(0.0134))[0]
+    assert tie.startswith("Within 2 %") and "use a with dt=0.0005" in tie
+    assert "A tie on cost with b" in tie and "b (dt=0.001) has the largest margin" in tie
+    clear = recommendation(frame(0.05))[0]
+    assert "tie" not in clear and "in order of cost: b" in clear
