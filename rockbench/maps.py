@@ -45,7 +45,7 @@ MAP_COLUMNS: dict[str, str] = {
     "frequency": "-, W = omega_g / p, p of the taller column",
     "pulse": "-, symmetric | antisymmetric Ricker pulse (paper Eqs. 29, 30)",
     "sign": "-, +1 the pulse as printed, -1 mirrored",
-    "overturned": "-, |phi| reached the fall angle",
+    "overturned": "-, |phi| reached the fall angle (engines: or came to rest beyond the critical angle)",
     "exceeded_critical": "-, |phi| exceeded the critical angle of its potential",
     "max_abs_phi_over_alpha": "-, max |phi| / alpha",
     "n_impacts": "-, impacts of the run",

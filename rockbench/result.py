@@ -87,7 +87,8 @@ class Summary:
 
     max_abs_phi: float                 # rad, max |phi| over the run
     max_abs_phi_over_alpha: float      # -, max |phi| / alpha (alpha of the taller column)
-    overturned: bool                   # |phi| reached the fall angle
+    overturned: bool                   # |phi| reached the fall angle, or an engine's structure
+    #                                    ended the run at rest beyond its critical angle (collapsed)
     t_overturn: float | None           # s
     exceeded_critical: bool            # |phi| exceeded the critical angle of the current potential
     uplifted: bool

@@ -384,6 +384,12 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     intact = stepped.intact
     status, reason = stepped.status, stepped.reason
     overturned, t_over = stepped.overturned, stepped.t_overturn
+    collapse = None
+    if not overturned and n:
+        quiet = t0 if motion is None else float(motion.t_end)
+        collapse = _collapse(tt, ph, intact, crit, quiet)
+        if collapse is not None:
+            overturned, t_over = True, float(tt[collapse])
     modes = np.where(np.abs(ph) <= uplift_phi, 0, np.sign(ph)).astype(np.int64)
     if stepped.contact is not None and len(stepped.contact[0]) == n:
         pen, sl, op = stepped.contact
@@ -403,6 +409,10 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     history = _history(scene, motion, tt, S, modes, intact, devices, stepped.native_report,
                        pen, sl)
     ev = list(stepped.events)
+    if collapse is not None:
+        ev.append(dict(t=t_over, kind="overturn", phi=float(ph[collapse]),
+                       phidot_before=float(pd_[collapse]), phidot_after=float(pd_[collapse]),
+                       direction=1 if ph[collapse] > 0 else -1))
     # events from the sampled motion
     free = motion is None and devices is None
     rest_rate = cfg.uplift_tol * alpha * scene.p
@@ -550,6 +560,22 @@ def _peak_energy_growth(exc: list, t: np.ndarray, phi: np.ndarray, intact: np.nd
                     f"{prev[0]:.4g} J")
         prev = (V, float(t[x.ipk]))
     return None
+
+
+def _collapse(t: np.ndarray, phi: np.ndarray, intact: np.ndarray, crit: dict,
+              t_quiet: float) -> int | None:
+    """Index of the sample from which an engine's structure stayed beyond its critical angle to
+    the end of a run that ends after the ground motion (``t_quiet`` [s]): it has collapsed -
+    come to rest on another body or on the ground before reaching the fall angle, which no
+    rigid-impact model allows (past the critical angle, with no input, the potential only
+    falls). None when the run does not end that way."""
+    if not t.size or t[-1] < t_quiet:
+        return None
+    beyond = _falling(phi, intact, crit)
+    if not beyond[-1]:
+        return None
+    inside = np.flatnonzero(~beyond)
+    return int(inside[-1] + 1) if inside.size else 0
 
 
 def _falling(phi: np.ndarray, intact: np.ndarray, crit: dict) -> np.ndarray:

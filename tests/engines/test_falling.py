@@ -59,3 +59,43 @@ def test_symmetric_frame_falls_before_lying_flat(engine):
     r = rb.run(scene, None, engine=engine, phi0=0.3, duration=4.0)
     assert r.summary.overturned, (r.summary.status, r.summary.reason, r.summary.max_abs_phi)
     assert fall * (1 - 1e-9) <= r.summary.max_abs_phi < math.pi / 2
+
+
+def test_a_frame_that_comes_to_rest_beyond_its_critical_angle_has_collapsed():
+    """pymunk leaves the asymmetric frame lying at 8.3 alpha (its clockwise fall angle is
+    8.75 alpha) after the longest symmetric pulse of the report's map: that is an overturn
+    (collapse), not survival (docs/conventions.md)."""
+    if "pymunk" not in rb.available_backends():
+        pytest.skip("pymunk is not installed")
+    from rockbench.analytic.reference import reference_of
+    from rockbench.maps import _duration
+
+    scene = rb.load_scene("paper-asymmetric")
+    pulse = rb.RickerPulse.dimensionless(6.7272727, 1.0, scene.structure, "symmetric", 1)
+    r = rb.run(scene, pulse, engine="pymunk", duration=_duration(scene, 1.0, 3.0))
+    s = r.summary
+    assert s.status == "ok" and s.overturned and s.exceeded_critical
+    crit = reference_of(scene).critical[(-1, False)]
+    phi = r.history["phi"].to_numpy()
+    assert -phi[-1] > crit and s.max_abs_phi < scene.fall_angles[-1]   # short of the fall angle
+    ev = r.events[r.events["kind"] == "overturn"]
+    assert len(ev) == 1 and ev["t"].iloc[0] == s.t_overturn
+    after = r.history["t"].to_numpy() >= s.t_overturn
+    assert (-phi[after] > crit).all() and not (-phi[~after][-1:] > crit).any()
+
+
+def test_collapse_needs_the_end_of_the_run_beyond_the_critical_angle_after_the_motion():
+    import numpy as np
+
+    from rockbench.engines.loop import _collapse
+
+    crit = {(1, True): 0.1, (-1, True): 0.1, (1, False): 0.1, (-1, False): 0.1}
+    t = np.arange(10.0)
+    intact = np.ones(10, bool)
+    lying = np.array([0, 0.05, 0.12, 0.05, 0.0, 0.2, 0.5, 1.1, 1.1, 1.1])
+    assert _collapse(t, lying, intact, crit, t_quiet=5.0) == 5
+    assert _collapse(t, -lying, intact, crit, t_quiet=5.0) == 5
+    assert _collapse(t, lying, intact, crit, t_quiet=20.0) is None      # motion not over
+    back = lying.copy()
+    back[-1] = 0.05
+    assert _collapse(t, back, intact, crit, t_quiet=5.0) is None       # came back
