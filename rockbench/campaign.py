@@ -416,6 +416,9 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
              "tradeoff.csv": choice["tradeoff"], "advice.csv": choice["advice"]}
     if len(records):
         files["record_peaks.csv"] = records
+    if choice.get("stress") is not None:
+        files["stress.csv"] = choice["stress"]
+        files["stress_breaking_points.csv"] = choice["breaks"]
     for name, df in files.items():
         df.to_csv(out / name, index=False)
     lines = campaign_conclusion(engines_tab, metrics, eta_summary, speed, omap, records,

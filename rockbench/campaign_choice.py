@@ -27,16 +27,18 @@ CHOICE_DTS = (2e-3, 1e-3, 5e-4)
 def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                full: bool = False, workers: int | None = None,
                progress: bool = False) -> dict[str, Any]:
-    """{"tradeoff": table, "advice": frame, "stress": table or None, "words": [str]}: the
+    """{"tradeoff": table, "advice": frame, "stress": table or None, "breaks": the first
+    breaking point of each engine along each axis (:func:`rockbench.stress.breaking_points`)
+    or None, "words": [str]}: the
     stability sweep runs in its fast form (``full``: the full form; ``quick``: none)."""
     from .advise import advice_for_report
-    from .stress import stress
+    from .stress import breaking_points, stress
     from .tradeoff import tradeoff
 
     names = [e for e in engines if e != "analytic"]
     if not names:
         return {"tradeoff": pd.DataFrame(), "advice": pd.DataFrame(), "stress": None,
-                "words": []}
+                "breaks": None, "words": []}
     dts = CHOICE_DTS[:2] if quick else CHOICE_DTS
     t = tradeoff(CHOICE_SCENE, names, dts=dts, repeat=1, quick=quick,
                  self_consistency="none", workers=workers, store=store / "tradeoff",
@@ -44,6 +46,7 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     advice = advice_for_report(t.table)
     st = None if quick else stress(names, full=full, workers=workers, progress=progress).table
     return {"tradeoff": t.table, "advice": advice, "stress": st, "stress_full": full,
+            "breaks": breaking_points(st) if st is not None else None,
             "words": recommendation(advice)}
 
 

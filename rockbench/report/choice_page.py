@@ -32,6 +32,14 @@ def choice_html(choice: Mapping[str, Any], figdir) -> str:
             parts.append("<h3>The cheapest setting of each engine within 2 % and 0.2 %</h3>"
                          + H.html_table(adv, list(adv.columns), graded=False, scroll=True))
     st = choice.get("stress")
+    br = choice.get("breaks")
+    if br is not None and len(br):
+        parts.append("<h3>Where each engine breaks first</h3><p>Per engine and axis, going away "
+                     "from the paper's frame on either side, the first value at which the run "
+                     "is off (beyond 5 % of the analytic model, or flagged), diverged or "
+                     "invalid; points where the analytic model itself stops applying are "
+                     "skipped (stress_breaking_points.csv; every point: stress.csv).</p>"
+                     + H.html_table(br, list(br.columns), graded=False, scroll=True))
     if st is not None and len(st):
         for eng in [e for e in dict.fromkeys(st["engine"])]:
             parts.append(H.figure_html(
