@@ -224,8 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--store", metavar="PATH",
                    help="result store (Parquet or CSV); finished cases are skipped on a rerun")
     p.add_argument("--full", action="store_true",
-                   help="the long campaign: every engine's overturning map at 12x12x4 on both "
-                        "map scenes and the stability sweep (reuses the store)")
+                   help="the long campaign: measure the 12x12x4 engine maps (OUT/engine-maps) "
+                        "that are missing or no longer reproduce, and the full stability sweep "
+                        "(reuses the store)")
     from .cli_choosing import add_choosing_commands
 
     add_choosing_commands(sub)
