@@ -49,20 +49,24 @@ def cpu(fn, repeat: int) -> tuple[float, float, float]:
     return statistics.median(xs), min(xs), max(xs)
 
 
+def _built(engine: str, scene, motion, duration: float):
+    """The engine's world built at rest and the ground motion's gravity at every step's
+    midpoint over the run window (as the loop computes it)."""
+    b = get_backend(engine)(scene)
+    t0, t_end = run_window(scene, motion, duration, 0.0)
+    dt = b.settings.dt
+    n = int(round((t_end - t0) / dt))
+    gx = -np.asarray(motion.acceleration(t0 + dt * (np.arange(n) + 0.5)), dtype=float)
+    b.build(0.0)
+    return b, gx
+
+
 def raw_stepping(engine: str, scene, motion, duration: float):
     """A function stepping the engine bare over the run window (gravity precomputed)."""
-    cls = get_backend(engine)
-
     def go():
-        b = cls(scene)
-        t0, t_end = run_window(scene, motion, duration, 0.0)
-        dt = b.settings.dt
-        n = int(round((t_end - t0) / dt))
-        t = t0 + dt * (np.arange(n) + 0.5)
-        gx = (-np.asarray(motion.acceleration(t), dtype=float)).tolist()
-        b.build(0.0)
+        b, gx = _built(engine, scene, motion, duration)
         step = b._step
-        for g in gx:
+        for g in gx.tolist():
             step(g, ())
         b._close()
     return go
@@ -86,16 +90,9 @@ def raw_c_stepping(engine: str, scene, motion, duration: float):
             gravity[0] = gx[k]
             _call_pp(step, model, data)
 
-    cls = get_backend(engine)
-
     def go():
-        b = cls(scene)
-        t0, t_end = run_window(scene, motion, duration, 0.0)
+        b, gx = _built(engine, scene, motion, duration)
         dt = b.settings.dt
-        n = int(round((t_end - t0) / dt))
-        t = t0 + dt * (np.arange(n) + 0.5)
-        gx = -np.asarray(motion.acceleration(t), dtype=float)
-        b.build(0.0)
         if engine == "pymunk":
             from rockbench.engines.chipmunk import engine as eng_of
             eng = eng_of(b._cspace, b._cbodies)

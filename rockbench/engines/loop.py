@@ -133,10 +133,9 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     t_steps = t0 + np.arange(1, n_steps + 1) * dt
     if motion is not None and n_steps:
         t_mid = np.concatenate(([t0], t_steps[:-1])) + 0.5 * dt
-        gx = (-np.asarray(motion.acceleration(t_mid), dtype=float)).tolist()
+        gx = -np.asarray(motion.acceleration(t_mid), dtype=float).reshape(n_steps)
     else:
-        gx = [0.0] * n_steps
-    t_steps = t_steps.tolist()
+        gx = np.zeros(n_steps)
     states = np.empty((n_out, nb, 6))
     sample_intact = np.zeros(n_out, dtype=bool)
     native_report: list[tuple] = []
@@ -155,12 +154,12 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
         state = np.array(read(), dtype=float)
         kernel = backend._compiled_loop()
         if kernel is not None:
-            n = _drive(kernel, state=state, gx=np.asarray(gx, dtype=float),
-                       t_steps=np.asarray(t_steps, dtype=float), grid=grid, t0=t0,
+            n = _drive(kernel, state=state, gx=gx, t_steps=t_steps, grid=grid, t0=t0,
                        t_tol=t_tol, states=states, sample_intact=sample_intact,
                        intact=intact, fall=(fall_p, fall_n), devices=devices,
                        check_strain=check_strain, checker=checker, out=out, backend=backend)
             raise _Done
+        gx, t_steps = gx.tolist(), t_steps.tolist()     # Python floats: the per-step loop
         gridl = grid.tolist()
         prev_t, prev = None, None
         t = t0
