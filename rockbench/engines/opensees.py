@@ -53,8 +53,8 @@ Model (one 2-D model, ``ndm 2 / ndf 3``, built from the scene's body specs)
 OpenSeesPy holds **one global model per process**: every build starts with ``wipe()`` and
 every run ends with ``wipe()``, so consecutive runs in one process are independent (tested:
 identical histories); two runs must not be interleaved (threads). OpenSees' own messages
-(warnings of failed iterations) go to ``logFile('/dev/null', '-noEcho')``; the library prints
-"Process 0 Terminating" to stderr when the interpreter exits.
+(warnings of failed iterations) go to ``logFile('/dev/null', '-noEcho')``; the library's
+"Process 0 Terminating" at interpreter exit is dropped (``engines/_quiet.py``).
 
 Settings, defaults and the measurements behind them: ``docs/engines/opensees.md``.
 """
@@ -70,6 +70,7 @@ import numpy as np
 from ..constants import G
 from ..errors import (ParameterError, check_choice, check_finite, check_int, check_positive,
                       check_range)
+from ._quiet import quiet_import
 from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, DeviceGeometry, PointForce, net_wrenches
 
@@ -187,7 +188,8 @@ class OpenseesBackend(EngineBackend):
     @classmethod
     def available(cls) -> tuple[bool, str]:
         try:
-            import openseespy.opensees as ops
+            # its "Process 0 Terminating" at exit goes to /dev/null (engines/_quiet.py)
+            ops = quiet_import("openseespy.opensees", at_exit=True)
             version = ops.version()
         except BaseException as e:  # noqa: BLE001 - a missing libblas.so.3 raises RuntimeError
             return False, (f"openseespy does not import ({type(e).__name__}: {e}); "
@@ -196,7 +198,7 @@ class OpenseesBackend(EngineBackend):
 
     # --- building ---------------------------------------------------------------------------
     def _build(self) -> None:
-        import openseespy.opensees as ops
+        ops = quiet_import("openseespy.opensees", at_exit=True)
 
         cfg = self.settings
         specs = self.specs

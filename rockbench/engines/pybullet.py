@@ -47,6 +47,7 @@ import numpy as np
 
 from ..constants import G
 from ..errors import ParameterError
+from ._quiet import quiet_import
 from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, PointForce
 
@@ -147,7 +148,7 @@ class PybulletBackend(EngineBackend):
     @classmethod
     def available(cls) -> tuple[bool, str]:
         try:
-            import pybullet
+            pybullet = quiet_import("pybullet")     # its build-time banner goes to /dev/null
         except Exception as e:  # pragma: no cover - depends on the machine
             return False, f"pybullet does not import: {e}"
         try:
@@ -159,7 +160,7 @@ class PybulletBackend(EngineBackend):
 
     # --- building -----------------------------------------------------------------------------
     def _build(self) -> None:
-        import pybullet as pb
+        pb = quiet_import("pybullet")
 
         cfg = self.settings
         self._pb = pb
