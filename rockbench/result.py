@@ -24,7 +24,8 @@ import numpy as np
 import pandas as pd
 
 __all__ = ["Result", "Summary", "Cost", "HISTORY_COLUMNS", "CONTACT_COLUMNS", "EVENT_COLUMNS",
-           "EVENT_KINDS", "STATUSES", "output_grid", "motion_label"]
+           "SUMMARY_FIELDS", "COST_FIELDS", "EVENT_KINDS", "STATUSES", "output_grid",
+           "motion_label"]
 
 #: History columns and units, in order.
 HISTORY_COLUMNS: dict[str, str] = {
@@ -60,6 +61,38 @@ EVENT_COLUMNS: dict[str, str] = {
     "phidot_after": "rad/s, angular velocity just after",
     "eta": "-, coefficient of restitution applied (analytic) or measured (engines); NaN otherwise",
     "direction": "-, +1/-1 rocking direction after the event (0: at rest)",
+}
+
+#: Summary fields: unit and meaning (what ``Summary.to_frame()`` and the notebook view show).
+SUMMARY_FIELDS: dict[str, str] = {
+    "max_abs_phi": "rad, largest |phi| over the run",
+    "max_abs_phi_over_alpha": "-, max |phi| / alpha (alpha of the taller column)",
+    "overturned": "-, the structure fell (|phi| reached the fall angle, or came to rest beyond "
+                  "its critical angle)",
+    "t_overturn": "s, time of the fall",
+    "exceeded_critical": "-, |phi| exceeded the critical angle of the current potential",
+    "uplifted": "-, the structure left its rest position",
+    "t_uplift": "s, first uplift",
+    "n_impacts": "-, number of impacts",
+    "fractured": "-, tendons/dampers fractured",
+    "t_fracture": "s, time of the fracture",
+    "status": "-, ok | diverged | invalid",
+    "reason": "-, why a run is not ok",
+    "eta_measured": "-, effective coefficient of restitution per impact (engines)",
+    "max_penetration": "m, largest penetration at any contact (engines)",
+    "max_sliding": "m, largest tangential slip of a contact point (engines)",
+    "contact_opened": "-, a contact the analytic model keeps closed opened (engines)",
+}
+
+#: Cost fields: unit and meaning.
+COST_FIELDS: dict[str, str] = {
+    "cpu_s": "s, process CPU time of the whole run (building included)",
+    "wall_s": "s, wall time of the integration or stepping only",
+    "sim_time": "s, simulated time",
+    "steps": "-, integrator or engine steps",
+    "rhs_calls": "-, right-hand-side evaluations (analytic)",
+    "cpu_real_time_factor": "-, simulated s per CPU s of the whole run",
+    "real_time_factor": "-, simulated s per wall s of the stepping",
 }
 
 EVENT_KINDS = ("uplift", "impact", "peak", "critical", "fracture", "overturn", "rest")
@@ -106,6 +139,66 @@ class Summary:
     def to_dict(self) -> dict[str, Any]:
         return _jsonable(asdict(self))
 
+    def to_frame(self) -> pd.DataFrame:
+        """The summary as a frame indexed by field, with columns ``value``, ``unit`` and
+        ``meaning`` (:data:`SUMMARY_FIELDS`); ``eta_measured`` is shown as its count, mean, min
+        and max."""
+        rows = []
+        for name, text in SUMMARY_FIELDS.items():
+            unit, meaning = text.split(", ", 1)
+            value = getattr(self, name)
+            if name == "eta_measured":
+                v = np.asarray(value, dtype=float)
+                value = (f"{v.size} impacts, mean {v.mean():.4f} "
+                         f"({v.min():.4f} .. {v.max():.4f})" if v.size else "none measured")
+            rows.append((name, value, unit, meaning))
+        return _field_frame(rows)
+
+    def _repr_html_(self) -> str:
+        return _fields_table(self.to_frame())
+
+    def __str__(self) -> str:
+        return _short_summary(self)
+
+
+def _short_summary(s: "Summary") -> str:
+    verdict = (f"overturned at t = {s.t_overturn:.3f} s" if s.overturned and s.t_overturn
+               is not None else "overturned" if s.overturned else "survived")
+    text = (f"{s.status}, max|phi|/alpha = {s.max_abs_phi_over_alpha:.4g}, {verdict}, "
+            f"{s.n_impacts} impacts")
+    if s.fractured:
+        text += ", fractured" + (f" at t = {s.t_fracture:.3f} s" if s.t_fracture is not None
+                                 else "")
+    if s.status != "ok" and s.reason:
+        text += f" ({s.reason})"
+    return text
+
+
+def _field_frame(rows: list[tuple[str, Any, str, str]]) -> pd.DataFrame:
+    """(field, value, unit, meaning) rows -> a frame indexed by field; values keep their types."""
+    names, values, units, meanings = zip(*rows)
+    index = pd.Index(names, name="field")
+    return pd.DataFrame({"value": pd.Series(list(values), index=index, dtype=object),
+                         "unit": list(units), "meaning": list(meanings)}, index=index)
+
+
+def _fields_table(frame: pd.DataFrame) -> str:
+    """An HTML table of a field/value/unit/meaning frame (the notebook view)."""
+    def cell(v: Any) -> str:
+        if isinstance(v, (float, np.floating)):
+            return "" if not math.isfinite(float(v)) else f"{float(v):.6g}"
+        return "" if v is None else str(v)
+
+    import html as _html
+    rows = "".join(
+        f"<tr><th style='text-align:left'>{_html.escape(str(i))}</th>"
+        f"<td style='text-align:right'>{_html.escape(cell(r['value']))}</td>"
+        f"<td>{_html.escape(str(r['unit']))}</td>"
+        f"<td style='text-align:left'>{_html.escape(str(r['meaning']))}</td></tr>"
+        for i, r in frame.iterrows())
+    return ("<table><thead><tr><th>field</th><th>value</th><th>unit</th><th>meaning</th>"
+            f"</tr></thead><tbody>{rows}</tbody></table>")
+
 
 @dataclass
 class Cost:
@@ -134,6 +227,16 @@ class Cost:
         d["real_time_factor"] = self.real_time_factor
         d["cpu_real_time_factor"] = self.cpu_real_time_factor
         return _jsonable(d)
+
+    def to_frame(self) -> pd.DataFrame:
+        """The cost as a frame indexed by field, with ``value``, ``unit``, ``meaning``
+        (:data:`COST_FIELDS`)."""
+        d = {**asdict(self), "real_time_factor": self.real_time_factor,
+             "cpu_real_time_factor": self.cpu_real_time_factor}
+        return _field_frame([(k, d[k], *t.split(", ", 1)) for k, t in COST_FIELDS.items()])
+
+    def _repr_html_(self) -> str:
+        return _fields_table(self.to_frame())
 
 
 @dataclass
@@ -172,6 +275,27 @@ class Result:
 
     def dumps(self) -> str:
         return json.dumps(self.to_json(), indent=2)
+
+    def label(self) -> str:
+        """``backend on 'scene' (motion)``: who ran what."""
+        return (f"{self.backend} on {getattr(self.scene, 'name', None) or 'scene'!r} "
+                f"({motion_label(self.motion)})")
+
+    def __repr__(self) -> str:
+        cpu = self.cost.cpu_s
+        cost = f", {cpu:.3g} CPU s" if cpu == cpu else ""
+        return f"<Result {self.label()}: {_short_summary(self.summary)}{cost}>"
+
+    def _repr_html_(self) -> str:
+        """The notebook view: who ran what, the summary and the cost, with units."""
+        import html as _html
+        return (f"<div><p><b>{_html.escape(self.label())}</b>: "
+                f"{_html.escape(_short_summary(self.summary))}</p>"
+                f"<details open><summary>summary</summary>{self.summary._repr_html_()}</details>"
+                f"<details><summary>cost</summary>{self.cost._repr_html_()}</details>"
+                f"<p>history: {len(self.history)} samples x {self.history.shape[1]} columns "
+                f"(<code>result.history</code>); events: {len(self.events)} rows "
+                "(<code>result.events</code>)</p></div>")
 
 
 def empty_events() -> pd.DataFrame:

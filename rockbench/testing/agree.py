@@ -27,6 +27,7 @@ _LABELS = ("name", "description")
 def _ensure(condition: Any, message: str) -> None:
     """Raise AssertionError(message) unless ``condition`` (unlike ``assert``, also under
     ``python -O``)."""
+    __tracebackhide__ = True  # pytest shows the caller's line, not this helper's frames
     if not condition:
         raise AssertionError(message)
 
@@ -123,6 +124,7 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
     the same ground motion (``result.motion == reference.motion``) and the same initial rotation
     (first sample of phi); otherwise ``ParameterError`` says what differs.
     """
+    __tracebackhide__ = True  # a failure points at the caller's line, not at this function
     from ..compare import _peak, eta_rows, history_error, metrics
     from ..result import Result, motion_label
 
