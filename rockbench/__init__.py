@@ -12,20 +12,58 @@ The public API (everything else is internal):
 Conventions (``docs/conventions.md``): SI units and radians; phi is the rotation of the left
 (taller) column from rest, positive counterclockwise; dimensionless axes a_g / (g tan alpha) and
 omega_g / p with alpha and p of the taller column.
+
+Names are imported on first use (PEP 562 ``__getattr__``): ``import rockbench`` and the command
+line's ``--help`` load neither pandas, scipy, numba nor any engine; ``rb.run`` loads what a run
+needs the first time it is touched.
 """
 
 from __future__ import annotations
 
-from .engines import available_backends, backend_names, engine_info, get_backend
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .errors import ParameterError, RecordError, RockbenchError, SceneError
-from .result import Result
-from .runner import info, run
-from .scene import (Block, Devices, Frame, GroundMotion, Record, RickerPulse, Scene,
-                    builtin_scenes, load_record, load_scene, make_pulse)
 
 __version__ = "0.1.0"
+
+#: Public name -> the module (relative to this package) that defines it, imported on first use.
+_LAZY: dict[str, str] = {
+    **dict.fromkeys(("Block", "Frame", "Devices", "Scene", "GroundMotion", "RickerPulse",
+                     "Record", "load_scene", "load_record", "builtin_scenes", "make_pulse"),
+                    ".scene"),
+    "Result": ".result",
+    **dict.fromkeys(("run", "info"), ".runner"),
+    **dict.fromkeys(("get_backend", "backend_names", "available_backends", "engine_info"),
+                    ".engines"),
+    **dict.fromkeys(("plot_history", "plot_map", "plot_work_precision"), ".plotting"),
+}
 
 __all__ = ["Block", "Frame", "Devices", "Scene", "GroundMotion", "RickerPulse", "Record",
            "Result", "load_scene", "load_record", "builtin_scenes", "make_pulse", "run", "info",
            "get_backend", "backend_names", "available_backends", "engine_info",
-           "RockbenchError", "ParameterError", "SceneError", "RecordError", "__version__"]
+           "RockbenchError", "ParameterError", "SceneError", "RecordError", "plot_history",
+           "plot_map", "plot_work_precision", "__version__"]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name's module on first use (then it is an ordinary attribute)."""
+    where = _LAZY.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(where, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+if TYPE_CHECKING:  # what static tools see (the same names, imported eagerly)
+    from .engines import available_backends, backend_names, engine_info, get_backend
+    from .plotting import plot_history, plot_map, plot_work_precision
+    from .result import Result
+    from .runner import info, run
+    from .scene import (Block, Devices, Frame, GroundMotion, Record, RickerPulse, Scene,
+                        builtin_scenes, load_record, load_scene, make_pulse)

@@ -40,7 +40,6 @@ import math
 import os
 import sys
 from collections.abc import Sequence
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -466,6 +465,8 @@ def cmd_engines(args: argparse.Namespace) -> int:
 
 
 def _package_version(dist: str) -> str | None:
+    from importlib import metadata
+
     try:
         return f"{dist} {metadata.version(dist)}"
     except metadata.PackageNotFoundError:

@@ -12,7 +12,7 @@ from ..scene.motion import antisymmetric_beta
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba  # noqa: F401 - re-exported (parallel_chunksize)
-    from numba import njit, prange
+    from .._jit import njit, prange   # numba's, cached once per installation (_jit.py)
     NUMBA_AVAILABLE = True
     NUMBA_ERROR: str | None = None
 except Exception as exc:  # noqa: BLE001 - any import failure means "no fast path"
