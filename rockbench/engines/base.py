@@ -182,13 +182,19 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
     return t0, t0 + duration
 
 
+#: The default history interval [s] of every engine (follows a coarser dt).
+_DEFAULT_OUTPUT_DT = 1e-3
+
+
 @dataclass(frozen=True)
 class EngineSettings:
     """Settings every engine has (adapters subclass this and add their own).
 
     dt : engine time step [s], in [1e-6, 1e-2].
     output_dt : history sampling interval [s] (>= dt, and in [1e-5, 1] s: limit ``output_dt`` of
-        :mod:`rockbench.limits`), the same grid as the analytic backend.
+        :mod:`rockbench.limits`), the same grid as the analytic backend. Left at its default
+        (1 ms), it follows a coarser ``dt`` (output_dt = dt): the one rule, for the Python API
+        and the command line alike.
     friction : Coulomb friction coefficient of every contact pair (the value the pair gets,
         whatever the engine's combination rule), > 0.
     uplift_tol : |phi| / alpha above which the structure counts as uplifted (engine contacts
@@ -200,7 +206,7 @@ class EngineSettings:
     """
 
     dt: float = 1e-3
-    output_dt: float = 1e-3
+    output_dt: float = _DEFAULT_OUTPUT_DT
     friction: float = 1.0
     uplift_tol: float = 1e-3
     max_penetration: float = 0.05
@@ -212,6 +218,9 @@ class EngineSettings:
         if not 1e-6 <= dt <= 1e-2:
             raise ParameterError("dt", self.dt, "in [1e-6, 1e-2] s")
         od = check_positive("output_dt", self.output_dt)
+        if od == _DEFAULT_OUTPUT_DT and dt > od:     # the default grid follows a coarser step
+            od = dt
+            object.__setattr__(self, "output_dt", dt)
         if od < dt * (1 - 1e-9):
             raise ParameterError("output_dt", self.output_dt, f">= dt = {dt:g} s")
         from ..limits import check_in_limit
