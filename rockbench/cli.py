@@ -231,6 +231,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_choosing_commands(sub)
     from .cli_maps import add_map_command
     add_map_command(sub, _key_value, _count)
+    from .cli_fragility import register as add_fragility  # rockbench fragility (issue 26)
+    add_fragility(sub, COMMANDS)
     return parser
 
 

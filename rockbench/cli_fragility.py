@@ -1,0 +1,132 @@
+"""The ``rockbench fragility`` command (issue 26, ``docs/fragility.md``): arguments and output
+only; the work is :mod:`rockbench.fragility`.
+
+    rockbench fragility SCENE --records DIR|FILE|NAME ... [--engine E ...] [--scales LO:HI:N]
+                        [--intensity pga|pgv] [--boot N] [--seed S] [--setting [ENGINE.]K=V ...]
+                        [--set KEY=VALUE ...] [--json] [--store DIR] [--workers N | --scheduler ADDR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+__all__ = ["register", "add_fragility_command", "cmd_fragility"]
+
+
+def _key_value(text: str) -> tuple[str, str]:
+    from .cli import _key_value as kv
+    return kv(text)
+
+
+def _count(text: str) -> int:
+    from .cli import _count as c
+    return c(text)
+
+
+def register(sub, commands: dict) -> None:
+    """Add the ``fragility`` sub-command to ``sub`` and its handler to ``commands`` (the one
+    line :mod:`rockbench.cli` spends on it)."""
+    add_fragility_command(sub)
+    commands["fragility"] = cmd_fragility
+
+
+def add_fragility_command(sub) -> None:
+    p = sub.add_parser("fragility", help="overturning fragility of a scene over an ensemble of "
+                       "records, every engine against the analytic model")
+    p.add_argument("scene", metavar="SCENE",
+                   help="a built-in scene name (rockbench scenes) or a path to a .toml file")
+    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=_key_value,
+                   action="append", default=[], help="override a scene parameter")
+    p.add_argument("--records", nargs="+", required=True, metavar="DIR|FILE|NAME",
+                   help="record folders, record files, or a bundled ensemble name "
+                        "(bundled, or a folder shipped under rockbench/records)")
+    p.add_argument("--engine", dest="engines", action="append", metavar="NAME",
+                   help="an engine (repeat, or comma-separated; default: every available "
+                        "backend); the analytic model always runs")
+    p.add_argument("--scales", default="0.25:2:8", metavar="LO:HI:N",
+                   help="ladder of scale factors of every record, N evenly spaced from LO to "
+                        "HI inclusive (default 0.25:2:8)")
+    p.add_argument("--intensity", choices=("pga", "pgv"), default="pga",
+                   help="intensity measure: pga [m/s^2] (default) or pgv [m/s]")
+    p.add_argument("--boot", type=_count, default=1000, metavar="N",
+                   help="bootstrap resamples of the records (default 1000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
+    p.add_argument("--setting", dest="settings", metavar="[ENGINE.]NAME=VALUE",
+                   type=_key_value, action="append", default=[],
+                   help="a backend setting (ENGINE.NAME=VALUE for one backend)")
+    p.add_argument("--dt", type=float, default=None, metavar="S",
+                   help="engine time step [s] (engines only)")
+    p.add_argument("--store", metavar="DIR",
+                   help="resumable store (default fragility/SCENE); a rerun runs only "
+                        "missing cases")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=_count, metavar="N", help="local worker processes")
+    g.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    p.add_argument("--json", action="store_true", help="print JSON")
+
+
+def _engines(values: list[str] | None) -> list[str] | None:
+    if not values:
+        return None
+    return [n.strip() for v in values for n in v.split(",") if n.strip()]
+
+
+def summary(frag) -> dict[str, Any]:
+    """The JSON the command prints: per backend ``median``, ``dispersion``, their intervals,
+    and (engines) the test's ``statistic`` and ``p_value`` and the verdict."""
+    a = frag.analysis
+    keep = ("median", "median_ci", "dispersion", "dispersion_ci", "runs", "not_ok",
+            "overturned", "records", "note", "n_valid_resamples", "cpu_s", "statistic",
+            "p_value", "median_difference", "median_difference_ci", "indistinguishable",
+            "verdict", "tests")
+    return {"scene": frag.scene, "intensity": a["intensity"], "reference": a["reference"],
+            "records": len(frag.records), "scales": frag.scales,
+            "engine_scales": frag.info.get("engine_scales"), "level": a["level"],
+            "n_boot": a["n_boot"], "seed": a["seed"], "store": frag.store,
+            "backends": {b: {k: v[k] for k in keep if k in v}
+                         for b, v in a["backends"].items()}}
+
+
+def _interval(ci) -> str:
+    lo, hi = ci
+    return "-" if not (math.isfinite(lo) and math.isfinite(hi)) else f"[{lo:.3g}, {hi:.3g}]"
+
+
+def cmd_fragility(args: argparse.Namespace) -> int:
+    from .cli_input import compare_settings, load_scene_from, scene_overrides
+    from .fragility import run_fragility
+
+    load_scene_from(args)                      # a bad scene or --set fails now
+    engines = _engines(args.engines)
+    settings = compare_settings(engines, args) or {}
+    store = args.store or str(Path("fragility") / Path(args.scene).stem)
+    frag = run_fragility(args.scene, args.records, engines=engines, scales=args.scales,
+                         measure=args.intensity, settings=settings,
+                         overrides=scene_overrides(args.overrides) or None, store=store,
+                         workers=args.workers, scheduler=args.scheduler,
+                         progress=sys.stderr.isatty() and not args.json, n_boot=args.boot,
+                         seed=args.seed)
+    out = summary(frag)
+    if args.json:
+        from .cli import _print_json
+        _print_json(out)
+        return 0
+    im = out["intensity"]
+    print(f"{frag.scene}: {out['records']} records x 2 polarities x {len(frag.scales)} scales "
+          f"({frag.scales[0]:g} to {frag.scales[-1]:g}); intensity {im['name']} [{im['unit']}]; "
+          f"95 % intervals from {out['n_boot']} bootstrap resamples of the records")
+    for b, v in out["backends"].items():
+        print(f"  {b:10s} median {v['median']:.4g} {im['unit']} {_interval(v['median_ci'])}, "
+              f"dispersion {v['dispersion']:.3g} {_interval(v['dispersion_ci'])}, "
+              f"{v['overturned']} of {v['runs'] - v['not_ok']} runs overturned"
+              + (f", {v['not_ok']} not ok" if v["not_ok"] else "")
+              + (f" ({v['note']})" if v["note"] else ""))
+    for b, v in out["backends"].items():
+        if "verdict" in v:
+            print(v["verdict"])
+    print(f"store: {frag.store}")
+    return 0
