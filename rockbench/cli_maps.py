@@ -4,6 +4,7 @@ the work is :mod:`rockbench.maps`."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -37,58 +38,149 @@ def add_map_command(sub, _key_value, _count) -> None:
     p.add_argument("--pulses", default="all", metavar="P",
                    help="all, or a comma-separated subset of symmetric+, symmetric-, "
                         "antisymmetric+, antisymmetric-")
-    p.add_argument("--setting", dest="settings", metavar="NAME=VALUE", type=_key_value,
-                   action="append", default=[], help="a backend setting (analytic: "
-                   "method=compiled|solve_ivp)")
+    from .cli import add_quiet_option, add_setting_option
+
+    add_setting_option(p, "set")       # the one grammar; analytic: method=compiled|solve_ivp
+    add_quiet_option(p)
     p.add_argument("--store", metavar="FILE.parquet",
                    help="resumable Parquet store (a folder; default maps/SCENE_ENGINE.parquet)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=_count, metavar="N", help="local worker processes")
     g.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
     p.add_argument("--compare", nargs=2, metavar=("A.parquet", "B.parquet"),
-                   help="overlay two stored maps: agreement, kappa, boundary shift; "
-                        "writes B's overlay figure next to B")
+                   help="two stored maps of the same cells: agreement, kappa, boundary shift "
+                        "(with --figure: B's verdicts overlaid on A)")
+    p.add_argument("--figure", metavar="FILE.png",
+                   help="draw the map (with --compare: the overlay) to this image file "
+                        "(.png, .pdf or .svg)")
     p.add_argument("--json", action="store_true", help="print JSON")
 
 
+def _one_line_warnings():
+    """A context in which a warning prints as one line ``rockbench: warning: ...``."""
+    import contextlib
+    import warnings
+
+    @contextlib.contextmanager
+    def ctx():
+        old = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            print(f"rockbench: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+        warnings.showwarning = show
+        try:
+            yield
+        finally:
+            warnings.showwarning = old
+    return ctx()
+
+
+def _figure_path(text: str | None) -> Path | None:
+    """The --figure path, checked before any work: a known image suffix, a writable folder."""
+    if text is None:
+        return None
+    from .errors import RockbenchError
+
+    path = Path(text)
+    if path.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise ParameterError("--figure", text, "a file name ending in .png, .pdf or .svg")
+    if path.is_dir():
+        raise RockbenchError(f"cannot write --figure {path}: it is a folder")
+    folder = path.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise RockbenchError(f"cannot write --figure {path}: {e.strerror or e}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise RockbenchError(f"cannot write --figure {path}: folder {folder} is not writable")
+    return path
+
+
+def _save(fig, path: Path) -> None:
+    from .errors import RockbenchError
+
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        fig.savefig(tmp, dpi=120)
+        os.replace(tmp, path)
+    except OSError as e:
+        raise RockbenchError(f"cannot write --figure {path}: {e.strerror or e}") from None
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 def cmd_map(args: argparse.Namespace) -> int:
+    with _one_line_warnings():
+        return _cmd_map(args)
+
+
+def _cmd_map(args: argparse.Namespace) -> int:
+    from .errors import RockbenchError
     from .maps import describe_shift, load_map, map_agreement, run_map
 
+    figure = _figure_path(args.figure)
     if args.compare:
         a, b = (load_map(x) for x in args.compare)
         ag = map_agreement(a, b)
-        out = {k: v for k, v in ag.items() if k != "shift"}
+        if ag["n"] == 0:
+            raise RockbenchError(f"{args.compare[0]} and {args.compare[1]} share "
+                                 f"{len(ag['cells'])} cells, but none ran with status ok in "
+                                 f"both: nothing to compare")
+        out = {k: v for k, v in ag.items() if k not in ("shift", "cells")}
         out["boundary"] = ag["shift"].to_dict(orient="records")
         out["in_words"] = describe_shift(ag["shift"], Path(args.compare[1]).stem)
+        if figure is not None:
+            from .report.map_figures import plot_map_overlay
+
+            name = Path(args.compare[1]).stem
+            _save(plot_map_overlay(a, b, name=name, title=f"{name} on {Path(args.compare[0]).stem}"
+                                   f": {100 * ag['fraction']:.1f} % of {ag['n']} cells agree"),
+                  figure)
+            out["figure"] = str(figure)
         if args.json:
             print_json(out)
             return 0
         print(f"{args.compare[1]} against {args.compare[0]}: {ag['n']} cells, "
               f"{100 * ag['fraction']:.2f} % agree, Cohen's kappa {ag['kappa']:.3f}")
         print(out["in_words"])
+        if figure is not None:
+            print(f"figure: {figure}")
         return 0
     if not args.scene:
         raise ParameterError("SCENE", None, "a scene name or .toml path (or --compare A B)")
     from .cli_input import scene_overrides as _overrides
 
     scene_overrides = _overrides(args.overrides) if args.overrides else None
-    settings = dict(args.settings)
-    method = settings.pop("method", None)
-    if args.engine != "analytic" and settings:
-        settings = backend_overrides(args.engine, argparse.Namespace(
-            settings=list(settings.items()), dt=None))
+    method, texts = None, []
+    for text in args.settings:         # the map's own analytic choice: method=compiled|solve_ivp
+        key, _, raw = text.partition("=")
+        if args.engine == "analytic" and key.strip() in ("method", "analytic.method"):
+            method = raw.strip()
+        else:
+            texts.append(text)
+    settings = backend_overrides(args.engine, argparse.Namespace(settings=texts, dt=None))
     store = args.store or str(Path("maps") / f"{Path(args.scene).stem}_{args.engine}.parquet")
     df = run_map(args.scene, args.engine, grid=args.grid, amplitude=args.amplitude,
                  frequency=args.frequency, pulses=args.pulses, overrides=scene_overrides,
                  settings=settings, method=method, store=store, workers=args.workers,
-                 scheduler=args.scheduler, progress=sys.stderr.isatty() and not args.json)
+                 scheduler=args.scheduler, progress=not args.quiet)
     summary = {"scene": args.scene, "engine": args.engine, "cells": len(df),
+               "cells_run": int(df.attrs.get("cells_run", 0)),
                "reused": int(df.attrs.get("reused", 0)), "store": store,
                "overturned": int(df["overturned"].fillna(False).astype(bool).sum()),
                "not_ok": int((df["status"] != "ok").sum()), "method": df.attrs.get("method")}
+    if figure is not None:
+        from .report.map_figures import plot_map_panels
+
+        _save(plot_map_panels(df, title=f"{df.attrs.get('scene', args.scene)}, {args.engine}"),
+              figure)
+        summary["figure"] = str(figure)
     if args.json:
         print_json(summary)
         return 0
     print(f"{args.scene}, {args.engine}: {summary['cells']} cells ({summary['reused']} reused "
           f"from {store}), {summary['overturned']} overturn, {summary['not_ok']} not ok")
+    if figure is not None:
+        print(f"figure: {figure}")
     return 0

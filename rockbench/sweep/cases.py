@@ -43,6 +43,7 @@ from ..result import motion_label
 from .store import key
 
 __all__ = ["CASE_KEYS", "normalize_case", "case_id", "flatten_case", "case_label", "pulse_grid",
+           "scene_name", "load_case_scene",
            "FreeCase", "PulseCase", "Catalogue", "catalogue", "campaign_plan", "CHECK_SCENE"]
 
 #: The keys a case may have (every other key is an error).
@@ -92,8 +93,9 @@ def normalize_case(case: Mapping[str, Any]) -> dict[str, Any]:
         raise ParameterError(f"case key {bad[0]!r}", case[bad[0]], f"one of {', '.join(CASE_KEYS)}")
     c = _plain(dict(case), "case")
     scene = c.get("scene")
-    if not isinstance(scene, str) or not scene:
-        raise ParameterError("scene", scene, "a built-in scene name or a path to a .toml file")
+    if not (isinstance(scene, str) and scene) and not isinstance(scene, dict):
+        raise ParameterError("scene", scene, "a built-in scene name, a path to a .toml file or "
+                                             "a scene's table (Scene.to_dict())")
     engine = c.get("engine", "analytic")
     if engine not in REGISTRY:
         raise ParameterError("engine", engine, f"one of {', '.join(REGISTRY)}")
@@ -160,9 +162,27 @@ def case_id(case: Mapping[str, Any]) -> str:
     return key(normalize_case(case))
 
 
+def scene_name(case: dict[str, Any]) -> str:
+    """The case's scene as text: its name or path (a scene table: its ``name``)."""
+    sc = case["scene"]
+    return str(sc.get("name") or "scene") if isinstance(sc, dict) else sc
+
+
+def load_case_scene(case: dict[str, Any]):
+    """The Scene of a normalized case (a name or path with its overrides, or a table)."""
+    from ..scene.scene import Scene, apply_overrides, load_scene
+
+    sc = case["scene"]
+    if isinstance(sc, dict):
+        data = apply_overrides(dict(sc), case["overrides"]) if case["overrides"] else sc
+        return Scene.from_dict(data, source=f"scene {scene_name(case)!r}")
+    return load_scene(sc, case["overrides"] or None)
+
+
 def flatten_case(case: dict[str, Any]) -> dict[str, Any]:
-    """scene, overrides.<k>, engine, settings.<k>, motion.kind, motion.<k>, phi0, duration."""
-    out: dict[str, Any] = {"scene": case["scene"]}
+    """scene (a table: its name), overrides.<k>, engine, settings.<k>, motion.kind,
+    motion.<k>, phi0, duration."""
+    out: dict[str, Any] = {"scene": scene_name(case)}
     for k, v in case["overrides"].items():
         out[f"overrides.{k}"] = v
     out["engine"] = case["engine"]
@@ -183,7 +203,7 @@ def case_label(case: dict[str, Any]) -> str:
     mot = motion_label(case["motion"])
     if case["motion"] is None:
         mot += f" phi0={case['phi0']:.3g} rad"
-    return f"{case['engine']} {Path(case['scene']).stem} {mot}"
+    return f"{case['engine']} {Path(scene_name(case)).stem} {mot}"
 
 
 # =========================================================================================

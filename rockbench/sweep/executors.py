@@ -16,18 +16,31 @@ on a Dask cluster, handing every result to the caller as soon as it finishes.
 ``fn`` must not raise for a failure of the work itself (turn it into a result): an exception
 that escapes stops the run. Ctrl-C cancels the queued items at once; results already handed to
 ``on_result`` (and stored by the caller) are kept.
+
+Local pools never have more workers than cores (:func:`local_workers`: a larger ``workers`` is
+capped, with a warning), and their workers die with the process that started them
+(:func:`_die_with_parent`: ``PR_SET_PDEATHSIG`` on Linux, so a ``kill -9`` of the parent leaves
+no orphan computing on). A Dask scheduler address is checked for its form and connected to
+within :data:`DASK_CONNECT_TIMEOUT` seconds; either failure is a one-line
+:class:`~rockbench.errors.RockbenchError` naming the address.
 """
 
 from __future__ import annotations
 
 import os
+import re
+import warnings
 from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Any
 
 from ..errors import ParameterError, RockbenchError
 
-__all__ = ["EXECUTORS", "execute", "check_options", "cpu_count"]
+__all__ = ["EXECUTORS", "execute", "check_options", "cpu_count", "local_workers",
+           "DASK_CONNECT_TIMEOUT"]
+
+#: Seconds to wait for a Dask scheduler to answer before giving up (Dask's own default is 30).
+DASK_CONNECT_TIMEOUT = 5.0
 
 #: Executors accepted by :func:`execute` (and :func:`rockbench.sweep.run_cases`).
 EXECUTORS = ("process", "serial", "dask")
@@ -43,8 +56,36 @@ def cpu_count() -> int:
         return os.cpu_count() or 1
 
 
+def local_workers(workers: int | None) -> int:
+    """Worker processes of a local pool: ``workers`` (default: the cores), capped at the cores
+    this process may run on, with a warning when capped (more processes than cores only add
+    memory: each worker holds its own engines)."""
+    n = cpu_count()
+    if workers is None:
+        return n
+    if workers > n:
+        warnings.warn(f"--workers {workers} is more than the {n} cores this process may use: "
+                      f"running {n} local worker processes", RuntimeWarning, stacklevel=3)
+        return n
+    return workers
+
+
+_ADDRESS = re.compile(r"^(tcp|tls|inproc|ucx|ws|wss)://[^\s/:]+(:\d{1,5})?/?$"
+                      r"|^[^\s/:]+:\d{1,5}$")
+
+
+def check_address(address: str) -> str:
+    """``address`` if it has the form of a Dask scheduler address (``tcp://host:port``, or
+    ``host:port``); ParameterError otherwise."""
+    if not isinstance(address, str) or not _ADDRESS.match(address.strip()):
+        raise ParameterError("scheduler", address, "a Dask scheduler address such as "
+                             "tcp://127.0.0.1:8786 (protocol://host:port)")
+    return address.strip()
+
+
 def check_options(executor: str, workers: int | None, dask_address: str | None) -> None:
-    """ParameterError for an unknown executor, a bad ``workers`` or an address without Dask."""
+    """ParameterError for an unknown executor, a bad ``workers``, an address without Dask or
+    an address that is not of a scheduler's form."""
     if executor not in EXECUTORS:
         raise ParameterError("executor", executor, f"one of {', '.join(EXECUTORS)}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
@@ -52,6 +93,34 @@ def check_options(executor: str, workers: int | None, dask_address: str | None) 
         raise ParameterError("workers", workers, "an integer >= 1 or None")
     if dask_address is not None and executor != "dask":
         raise ParameterError("dask_address", dask_address, "given only with executor='dask'")
+    if dask_address is not None:
+        check_address(dask_address)
+
+
+def _die_with_parent(parent: int) -> None:
+    """Pool-worker initializer: ask the kernel to kill this worker when its parent dies (Linux
+    ``prctl(PR_SET_PDEATHSIG, SIGKILL)``), and exit at once if the parent is already gone.
+    Elsewhere nothing is done (the pool's own shutdown still ends the workers)."""
+    import signal
+    import sys
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):  # pragma: no cover - no libc prctl
+            pass
+    if os.getppid() != parent:  # the parent died before the request took effect
+        os._exit(1)
+
+
+def _process_pool(workers: int):
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=workers, initializer=_die_with_parent,
+                               initargs=(os.getpid(),))
 
 
 def _crash_reason(e: BaseException) -> str:
@@ -78,8 +147,8 @@ def execute(fn: Callable[[Any], Any], items: Sequence[Item], *,
     bar = None
     n_err = [0]
     if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=len(items), desc=desc, unit=unit, dynamic_ncols=True)
+        from ..progress import bar as progress_bar   # tqdm on a terminal, lines otherwise
+        bar = progress_bar(len(items), desc, unit)
 
     def done(k: str, result: Any) -> None:
         on_result(k, result)
@@ -94,13 +163,13 @@ def execute(fn: Callable[[Any], Any], items: Sequence[Item], *,
             bar.set_postfix_str(text, refresh=refresh)
 
     try:
-        n_workers = min(workers or cpu_count(), len(items))
         if executor == "serial":
             for k, item in items:
                 show(label(item))
                 done(k, fn(item))
         elif executor == "process":
-            _pool(fn, items, n_workers, done, show, label, crashed)
+            _pool(fn, items, min(local_workers(workers), len(items)), done, show, label,
+                  crashed)
         else:
             _dask(fn, items, workers, dask_address, done, show, label, crashed)
     finally:
@@ -111,12 +180,12 @@ def execute(fn: Callable[[Any], Any], items: Sequence[Item], *,
 def _pool(fn, items: list[Item], workers: int, done, show, label, crashed) -> None:
     """A process pool with at most ``workers`` items in flight; a dead pool makes every item in
     flight a suspect, rerun alone (:func:`_isolated`)."""
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures import FIRST_COMPLETED, wait
     from concurrent.futures.process import BrokenProcessPool
 
     queue = deque(items)
     inflight: dict[Any, Item] = {}
-    ex = ProcessPoolExecutor(max_workers=workers)
+    ex = _process_pool(workers)
     try:
         while queue or inflight:
             while queue and len(inflight) < workers:
@@ -141,7 +210,7 @@ def _pool(fn, items: list[Item], workers: int, done, show, label, crashed) -> No
                 for k, item in suspects:
                     show(f"isolating {label(item)}")
                     done(k, _isolated(fn, item, crashed))
-                ex = ProcessPoolExecutor(max_workers=workers)
+                ex = _process_pool(workers)
     finally:
         # on Ctrl-C: drop the queued items at once (finished ones are already handed over)
         ex.shutdown(wait=False, cancel_futures=True)
@@ -149,10 +218,9 @@ def _pool(fn, items: list[Item], workers: int, done, show, label, crashed) -> No
 
 def _isolated(fn, item: Any, crashed) -> Any:
     """Run one item in a fresh single-worker process pool; a dying worker -> ``crashed``."""
-    from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
-    with ProcessPoolExecutor(max_workers=1) as ex:
+    with _process_pool(1) as ex:
         try:
             return ex.submit(fn, item).result()
         except BrokenProcessPool as e:
@@ -168,9 +236,18 @@ def _dask(fn, items: list[Item], workers: int | None, address: str | None, done,
                              "pip install 'rockbench[dask]'") from None
     cluster = None
     if address:
-        client = Client(address)
+        address = check_address(address)
+        try:
+            client = Client(address, timeout=DASK_CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError, TypeError) as e:
+            why = " ".join(str(e).split()) or type(e).__name__
+            raise RockbenchError(
+                f"cannot reach the Dask scheduler at {address} within "
+                f"{DASK_CONNECT_TIMEOUT:g} s ({why[:200]}); start one (`dask scheduler`) and "
+                f"give its address, or leave out --scheduler to run on local processes"
+            ) from None
     else:
-        cluster = LocalCluster(n_workers=workers or cpu_count(), threads_per_worker=1,
+        cluster = LocalCluster(n_workers=local_workers(workers), threads_per_worker=1,
                                processes=True, dashboard_address=None)
         client = Client(cluster)
     try:

@@ -8,13 +8,13 @@ import json
 import math
 import time
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 import pandas as pd
 
 from . import store as S
-from .cases import case_id, case_label, flatten_case, normalize_case
+from .cases import case_id, case_label, flatten_case, load_case_scene, normalize_case
 from .executors import check_options, execute
 
 __all__ = ["run_case", "run_cases", "TIMING_COLUMNS"]
@@ -82,9 +82,8 @@ def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
     try:
         from ..runner import run
         from ..scene.motion import motion_from_spec
-        from ..scene.scene import load_scene
 
-        scene = load_scene(norm["scene"], norm["overrides"] or None)
+        scene = load_case_scene(norm)
         motion = motion_from_spec(norm["motion"], scene.structure)
         result = run(scene, motion, engine=norm["engine"], duration=norm["duration"],
                      phi0=norm["phi0"], **norm["settings"])
@@ -122,12 +121,11 @@ def run_batch_cases(norms: list[dict[str, Any]], nthread: int | None = 1) -> lis
     of the batch."""
     from ..engines.mujoco import MujocoBackend, batch_refusal, run_batch
     from ..scene.motion import motion_from_spec
-    from ..scene.scene import load_scene
 
     t = time.perf_counter()
     first = norms[0]
     try:
-        scene = load_scene(first["scene"], first["overrides"] or None)
+        scene = load_case_scene(first)
         why = batch_refusal(scene, MujocoBackend(scene, **first["settings"]).settings)
         if why is not None:
             return [run_case(n) for n in norms]
@@ -204,7 +202,8 @@ def _frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
 def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = None,
               executor: str = "process", workers: int | None = None,
               dask_address: str | None = None, progress: bool = True,
-              retry_errors: bool = False, batch: bool = True) -> pd.DataFrame:
+              retry_errors: bool = False, batch: bool = True,
+              on_rows: Callable[[list[dict[str, Any]]], None] | None = None) -> pd.DataFrame:
     """Run every case and return one row per case, in input order (``docs/sweeps.md``).
 
     Parameters
@@ -227,6 +226,9 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
         Run MuJoCo cases of one scene and settings together in ``mujoco.rollout``
         (:func:`run_batch_cases`; default True); scenes the batched path refuses fall back to
         the plain path.
+    on_rows : callable, optional
+        Called in this process with the rows of each finished executor item (one case, or a
+        MuJoCo batch) as it finishes, after the store has them (e.g. to keep them elsewhere).
 
     Columns: ``case_id``, the flattened case (``scene``, ``overrides.<k>``, ``engine``,
     ``settings.<k>``, ``motion.kind``, ``motion.<k>``, ``phi0`` [rad], ``duration`` [s]), then
@@ -279,6 +281,8 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
                 on_result(cid, row)
         else:
             on_result(key, out)
+        if on_rows is not None:
+            on_rows(list(out) if key in ids_of else [out])
 
     def crashed(item: tuple, reason: str) -> Any:
         kind, payload = item

@@ -9,13 +9,17 @@ file in the store is always complete; a killed process leaves only a ``.tmp-*`` 
   :func:`load_store` returns every row (the latest per case id). Why Parquet parts and not one
   appended CSV: cases of one sweep may have different keys (overrides, record vs pulse), which
   a fixed CSV header cannot hold; a killed process can leave a half-written CSV line; and types
-  (bool, int, None) survive. Needs ``pyarrow`` (``pip install 'rockbench[parquet]'``).
+  (bool, int, None) survive. Needs ``pyarrow`` (a core dependency).
 * **payloads** (the campaign's comparisons: tables and thinned histories): one pickle per item,
   ``DIR/<key>.pkl`` (:func:`write_payload`, :func:`load_payload`).
 
 :func:`code_fingerprint` hashes what decides a run's physics; the campaign keeps its store
 under ``<store>/<fingerprint>/`` (``cases/`` for rows, ``comparisons/`` for payloads) so that
 results of other code are never mixed in.
+
+:func:`writer_lock` holds a store for one writing process (an ``flock`` on ``DIR/_lock``,
+released by the kernel when the process dies, even by ``kill -9``): a second writer is refused
+with a message naming the first one's process id.
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ import pandas as pd
 from ..errors import ParameterError, RockbenchError
 
 __all__ = ["key", "canonical", "code_fingerprint", "store_dir", "need_pyarrow", "have_pyarrow",
-           "write_row", "load_store", "compact", "write_payload", "load_payload"]
+           "write_row", "load_store", "compact", "write_payload", "load_payload", "writer_lock"]
 
 
 # =========================================================================================
@@ -67,7 +71,7 @@ def code_fingerprint() -> str:
     of the installed engines."""
     import rockbench
 
-    from ..engines import engine_info
+    from ..engines import engine_versions
 
     root = Path(rockbench.__file__).resolve().parent
     h = hashlib.sha256()
@@ -79,7 +83,7 @@ def code_fingerprint() -> str:
             continue
         h.update(rel.encode())
         h.update(f.read_bytes())
-    h.update(json.dumps(engine_info(), sort_keys=True, default=str).encode())
+    h.update(json.dumps(engine_versions(), sort_keys=True).encode())  # imports no engine
     return h.hexdigest()[:12]
 
 
@@ -103,9 +107,60 @@ def have_pyarrow() -> bool:
 
 
 def need_pyarrow() -> None:
+    """RockbenchError (one line, with the remedy) when pyarrow does not import."""
     if not have_pyarrow():
-        raise RockbenchError("a sweep store is written in Parquet and needs pyarrow: "
-                             "pip install 'rockbench[parquet]'")
+        raise RockbenchError("stores are written in Parquet and need pyarrow, a dependency of "
+                             "rockbench that is not installed here: pip install pyarrow")
+
+
+class writer_lock:
+    """Context manager: hold ``directory`` (created if missing) for this process's writes, by
+    an exclusive ``flock`` on ``directory/_lock`` (the leading underscore keeps Parquet readers
+    from taking it for data). Another process holding it -> RockbenchError naming that process
+    and the remedy. The kernel releases the lock when the holder exits or is killed."""
+
+    def __init__(self, directory: Path, what: str = "store"):
+        self.directory = Path(directory)
+        self.what = what
+        self._fd: int | None = None
+
+    def __enter__(self) -> "writer_lock":
+        path = self.directory / "_lock"
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX: no lock
+            return self
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as e:
+            raise RockbenchError(f"cannot write the {self.what} {self.directory}: "
+                                 f"{e.strerror or e}; give a folder you can write "
+                                 f"(--store)") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            try:
+                holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "?"
+            except OSError:
+                holder = "?"
+            os.close(fd)
+            raise RockbenchError(
+                f"the {self.what} {self.directory} is being written by another process "
+                f"(pid {holder}); wait until it finishes (it keeps every cell it computes, "
+                f"and a rerun then reuses them), or give another --store") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        self._fd = fd
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._fd is not None:
+            try:
+                os.ftruncate(self._fd, 0)
+            except OSError:
+                pass
+            os.close(self._fd)  # releases the flock
+            self._fd = None
 
 
 def _atomic(path: Path, write) -> Path:
