@@ -110,6 +110,21 @@ LIMITS: dict[str, Limit] = {lim.key: lim for lim in (
     Limit("output_dt", 1e-5, 1.0, unit="s",
           why="history sampling interval: finer than 1e-5 s is all memory, coarser than "
               "1 s misses every impact"),
+    # physical ranges of a scene's fields (docs/scenes.md lists which field takes which)
+    Limit("length", 1e-3, 1e3, unit="m",
+          why="every length of a scene: from a 1 mm model to a 1 km structure"),
+    Limit("density", 1.0, 25000.0, unit="kg/m^3",
+          why="mass density: from the lightest solids (aerogels, ~1 kg/m^3) to beyond the "
+              "densest (osmium, 22590 kg/m^3)"),
+    Limit("mass_ratio", 1e-3, 1e3,
+          why="beam mass / left column mass: from a light steel beam on masonry piers to a "
+              "heavy deck on slender piers (the paper: 10)"),
+    Limit("stiffness", 0.0, 1e12, unit="N/m",
+          why="tendon stiffness EA/l: 0 (none) to a steel bar of 1 m^2 over 0.2 m (the "
+              "paper: 23.5e6)"),
+    Limit("damping", 0.0, 1e12, unit="N s/m",
+          why="damper constant: 0 (none) to far beyond any built viscous damper (the paper: "
+              "25.3e6)"),
 )}
 
 

@@ -344,7 +344,7 @@ def scene_files(draw, folder: Path):
                                           "[structure]\ntype = block\n"])),
         "structure_value": f"structure = {value}\n",
         "bad_type": f'[structure]\ntype = {value}\n',
-        "frame": '[structure]\ntype = "frame"\ncolumn_height_right = 6.0\n',
+        "frame": 'preset = "paper"\n[structure]\ntype = "frame"\ncolumn_height_right = 6.0\n',
         "wrong_kind": 'kind = "case-catalogue"\n[structure]\ntype = "block"\n',
         "devices_on_block": '[structure]\ntype = "block"\n[devices]\ndamping = 1e6\n',
     }[kind]

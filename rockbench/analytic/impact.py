@@ -20,26 +20,12 @@ the symmetric frame, Housner's 1 - 1.5 sin^2 alpha for the block, and the paper'
 
 from __future__ import annotations
 
-from .dynamics import Dynamics
+from ..scene.scene import restitution
 
 __all__ = ["restitution", "eta"]
 
-
-def _jacobian(dyn: Dynamics) -> list[tuple[float, float, float, float, float]]:
-    cfg = dyn.configuration(0.0)
-    return [(m, Ic, bk.dx, bk.dy, bk.dtheta) for m, Ic, bk in zip(dyn._m, dyn._I, cfg.bodies)]
-
-
-def restitution(structure, pre: int, post: int) -> float:
-    """phi'^+ / phi'^- [-] of an impact from mechanism ``pre`` into mechanism ``post``
-    (directions +1 or -1). For ``pre == post`` (no change of pivots) it is 1."""
-    jpre = _jacobian(Dynamics(structure, pre))
-    jpost = _jacobian(Dynamics(structure, post))
-    num = den = 0.0
-    for (m, Ic, ax, ay, at), (_, _, bx, by, bt) in zip(jpre, jpost):
-        num += m * (ax * bx + ay * by) + Ic * at * bt
-        den += m * (bx * bx + by * by) + Ic * bt * bt
-    return num / den
+# restitution(structure, pre, post) is the formula above; it lives with the scene, which
+# refuses a structure whose eta is negative (it cannot rock), so that both use one copy.
 
 
 def eta(structure, direction: int) -> float:

@@ -13,6 +13,9 @@ its base pivot the chord is ``4 b sin(|theta|/2)`` and the damper force is ``C d
 
 When either tendon reaches ``eps_f`` all tendons and dampers are removed for the rest of the run
 (paper: simultaneous brittle failure).
+
+Every parameter is required (the paper's devices are in ``rockbench/scenarios/
+paper-asymmetric-hybrid.toml``): ``docs/scenes.md``.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from ..errors import ParameterError, check_nonnegative, check_positive
+from .schema import fields_of
 
 __all__ = ["Devices"]
 
@@ -29,24 +33,30 @@ __all__ = ["Devices"]
 class Devices:
     """Tendons and dampers of a hybrid frame (one of each per column).
 
-    Parameters
+    Parameters (all required)
     ----------
     tendon_stiffness : float
         k = EA / l [N/m], >= 0 (paper: 23.5e6). 0 means no tendons.
     tendon_length : float
         Free length l [m], > 0 (paper: 8.5).
     fracture_strain : float or None
-        eps_f [-], > 0, or None for tendons that never fracture (paper: None, 0.02, 0.01).
+        eps_f [-], in (0, 1), or None (say it: ``fracture_strain=None``) for tendons that never
+        fracture (paper: None, 0.02, 0.01).
     damping : float
         Damper constant C [N s/m], >= 0 (paper: 25.3e6). 0 means no dampers.
     """
 
-    tendon_stiffness: float = 23.5e6
-    tendon_length: float = 8.5
-    fracture_strain: float | None = None
-    damping: float = 25.3e6
+    tendon_stiffness: float = ...  # type: ignore[assignment]  # required: ... is refused
+    tendon_length: float = ...  # type: ignore[assignment]
+    fracture_strain: float | None = ...  # type: ignore[assignment]
+    damping: float = ...  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
+        for f in fields_of("devices"):
+            if getattr(self, f.name) is ...:
+                raise ParameterError(f.name, "missing", "given",
+                                     f"devices field: {f.meaning} [{f.unit}], {f.range_text()}; "
+                                     "docs/scenes.md")
         object.__setattr__(self, "tendon_stiffness",
                            check_nonnegative("tendon_stiffness", self.tendon_stiffness))
         object.__setattr__(self, "tendon_length",

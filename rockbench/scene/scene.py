@@ -8,18 +8,29 @@ Scenes are data: TOML files (built-in ones in ``rockbench/scenarios/``) of the f
     description = "..."
     [structure]                 # required, with its type
     type = "frame"              # or "block"
-    column_height_right = 5.6   # any Frame / Block parameter; omitted ones take their defaults
-    [devices]                   # optional, frames only
+    column_width = 1.0          # every required field of the type; docs/scenes.md
+    ...
+    [devices]                   # optional, frames only: all four fields
     tendon_stiffness = 23.5e6
-    fracture_strain = 0.01      # omit for no fracture
+    tendon_length = 8.5
+    fracture_strain = 0.01      # or "none"
+    damping = 25.3e6
+
+Every field, its unit, range and default: ``docs/scenes.md`` (generated from
+:mod:`rockbench.scene.schema`). A required field left out is refused (one line naming it);
+``preset = "paper"`` takes the fields left out from the paper's frame on purpose.
 
 Any parameter can be overridden with ``key=value`` strings (``span=9``, ``structure.span=9``,
-``devices.fracture_strain=none``, ``fall_angle=1.2``).
+``devices.fracture_strain=none``, ``fall_angle=1.2``). :func:`load_scene` is the one resolver of
+a scene argument: a built-in name, a path, or a :class:`Scene` (returned as it is, or with the
+overrides applied). :meth:`Scene.to_toml` and :func:`save_scene` write a scene back.
 """
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import tomllib
 from dataclasses import dataclass, fields, replace
 from functools import cached_property
@@ -28,10 +39,13 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..errors import ParameterError, SceneError, check_range
+from ..limits import LIMITS, check_in_limit, override_hint
 from .devices import Devices
+from .schema import fields_of, required
 from .structure import Block, Frame
 
-__all__ = ["Scene", "load_scene", "builtin_scenes", "apply_overrides"]
+__all__ = ["Scene", "load_scene", "save_scene", "builtin_scenes", "apply_overrides",
+           "restitution"]
 
 _STRUCTURES = {"block": Block, "frame": Frame}
 
@@ -68,6 +82,7 @@ class Scene:
         if self.fall_angle is not None:
             object.__setattr__(self, "fall_angle", check_range(
                 "fall_angle", self.fall_angle, 0.0, math.pi, lo_open=True))
+        _check_ranges(self.structure, self.devices)
         if isinstance(self.structure, Frame):
             from .mechanism import geometric_limit, mechanism
             lims = {s: geometric_limit(mechanism(self.structure, s)) for s in (1, -1)}
@@ -79,6 +94,7 @@ class Scene:
                     f"it ends at {lims[1]:.4g} rad counterclockwise, {lims[-1]:.4g} rad "
                     "clockwise: a column would rotate against the beam, which would then bear "
                     "on the column's other top corner (a squat frame with very unequal columns)")
+        _check_rocks(self.structure)
 
     # --- derived, shared by all backends --------------------------------------------------
     @property
@@ -125,6 +141,25 @@ class Scene:
             d["fall_angle"] = self.fall_angle
         return d
 
+    def to_toml(self) -> str:
+        """The scene as a scene file (TOML): every field it holds, written out; optional
+        fields at their default are left out. ``load_scene`` of the file gives back an equal
+        scene (:func:`save_scene`)."""
+        lines = ['kind = "scene"', f"name = {_toml_str(self.name)}",
+                 f"description = {_toml_str(self.description)}"]
+        if self.fall_angle is not None:
+            lines.append(f"fall_angle = {_toml_num(self.fall_angle)}")
+        lines += ["", "[structure]", f'type = "{self.structure.kind}"']
+        st = self.structure.to_dict()
+        lines += [f"{f.name} = {_toml_num(st[f.name])}" for f in fields_of(self.structure.kind)
+                  if f.name in st]
+        if self.devices is not None:
+            dv = self.devices.to_dict()
+            lines += ["", "[devices]"]
+            lines += [f"{f.name} = " + ('"none"' if dv[f.name] is None else _toml_num(dv[f.name]))
+                      for f in fields_of("devices")]
+        return "\n".join(lines) + "\n"
+
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, source: str = "<dict>") -> "Scene":
         """Build a validated scene from the TOML structure described in the module docstring.
@@ -137,7 +172,7 @@ class Scene:
             raise SceneError(f"{source}: a scene is a table of keys (name, description, "
                              f"[structure], [devices], fall_angle), not {type(data).__name__}")
         allowed = {"kind", "name", "version", "description", "structure", "devices",
-                   "fall_angle"}
+                   "fall_angle", "preset"}
         if data.get("kind", "scene") != "scene":
             raise SceneError(f"{source}: kind = {data['kind']!r}: not a scene file (a scene "
                              "file has kind = \"scene\" or no kind)")
@@ -151,6 +186,10 @@ class Scene:
         if "version" in data and (isinstance(data["version"], bool)
                                   or not isinstance(data["version"], int)):
             raise SceneError(f"{source}: version must be an integer, got {data['version']!r}")
+        preset = data.get("preset")
+        if preset is not None and preset not in _PRESETS:
+            raise SceneError(f"{source}: preset = {preset!r}: the presets are "
+                             f"{', '.join(repr(p) for p in _PRESETS)} (or leave preset out)")
         devices = None
         if data.get("devices") is not None:
             if not isinstance(data["devices"], Mapping):
@@ -158,6 +197,15 @@ class Scene:
                                  f"got {data['devices']!r}")
             dv = dict(data["devices"])
             _check_keys(f"{source} [devices]", dv, Devices)
+            if preset is not None:
+                dv = {**_preset(preset, "devices"), **dv}
+            if isinstance(dv.get("fracture_strain"), str):
+                if dv["fracture_strain"].strip().lower() != "none":
+                    raise SceneError(f"{source} [devices]: fracture_strain = "
+                                     f"{dv['fracture_strain']!r}: a number in (0, 1), or "
+                                     '"none" for tendons that never fracture')
+                dv["fracture_strain"] = None
+            _check_required(f"{source} [devices]", dv, "devices")
             devices = Devices(**dv)
         kinds = " or ".join(repr(k) for k in sorted(_STRUCTURES, reverse=True))
         if "structure" not in data:
@@ -174,6 +222,16 @@ class Scene:
             raise ParameterError("structure.type", kind, f"one of {sorted(_STRUCTURES)}")
         cls_ = _STRUCTURES[kind]
         _check_keys(f"{source} [structure]", st, cls_)
+        if preset is not None:
+            if kind != "frame":
+                raise SceneError(f"{source}: preset = {preset!r} is the paper's frame; a "
+                                 f"{kind} takes no preset (give its fields)")
+            base = _preset(preset, "structure")
+            if "beam_mass" in st or "mass_ratio" in st:   # the beam's mass is given one way
+                base = {k: v for k, v in base.items() if k not in ("beam_mass", "mass_ratio")}
+            st = {**base, **st}
+        st = {k: v for k, v in st.items() if v is not None}
+        _check_required(f"{source} [structure]", st, kind)
         structure = cls_(**st)
         return cls(structure=structure, devices=devices, name=str(data.get("name", "custom")),
                    description=str(data.get("description", "")),
@@ -191,10 +249,136 @@ def _check_keys(where: str, d: Mapping[str, Any], cls_) -> None:
     if bad:
         raise SceneError(f"{where}: unknown parameter(s) {sorted(bad)}; known: {sorted(names)}")
     for key, value in d.items():
+        if key == "fracture_strain" and isinstance(value, str):
+            continue   # "none": checked by the caller
         if value is not None and (isinstance(value, bool)
                                   or not isinstance(value, (int, float))):
             raise SceneError(f"{where}: {key} = {value!r} is a {type(value).__name__}, "
                              "not a number")
+
+
+def _check_required(where: str, d: Mapping[str, Any], table: str) -> None:
+    """Refuse a table that leaves out a required field, in one line naming it (and any other
+    missing one) with its meaning, unit and range."""
+    missing = [n for n in required(table) if d.get(n, ...) is ...]
+    if not missing:
+        return
+    f = next(f for f in fields_of(table) if f.name == missing[0])
+    also = f" (also missing: {', '.join(missing[1:])})" if missing[1:] else ""
+    if table == "devices":
+        need = f"a [devices] table gives all of {', '.join(required(table))}"
+    else:
+        need = f"a {table} needs {', '.join(required(table))}"
+    hint = "" if table == "block" else ', or preset = "paper" for the paper\'s values'
+    raise SceneError(f"{where}: missing {f.name}: {f.meaning} [{f.unit}], {f.range_text()}"
+                     f"{also}; {need} (docs/scenes.md){hint}")
+
+
+#: preset name -> the built-in scene files its structure and devices come from
+_PRESETS = {"paper": ("paper-asymmetric", "paper-asymmetric-hybrid")}
+
+
+def _preset(name: str, table: str) -> dict[str, Any]:
+    """The ``[structure]`` (without its type) or ``[devices]`` table of preset ``name``, read
+    from the built-in scene file that states it."""
+    scene = _PRESETS[name][0 if table == "structure" else 1]
+    data = tomllib.loads((_scenario_dir() / f"{scene}.toml").read_text())
+    out = dict(data[table])
+    out.pop("type", None)
+    return out
+
+
+def _check_ranges(structure: Block | Frame, devices: Devices | None) -> None:
+    """Every field within its physical range (:data:`rockbench.limits.LIMITS`, per
+    :mod:`rockbench.scene.schema`), checked before any arithmetic on the fields."""
+    for obj, table in ((structure, structure.kind), (devices, "devices")):
+        if obj is None:
+            continue
+        for f in fields_of(table):
+            value = getattr(obj, f.name)
+            if f.limit is not None and value is not None:
+                check_in_limit(f.limit, f.name, value)
+    if isinstance(structure, Frame) and structure.beam_mass is not None:
+        lo, hi = LIMITS["mass_ratio"].current()
+        m = structure.mass_left
+        ratio = structure.beam_mass / m
+        if not lo <= ratio <= hi:
+            raise ParameterError("beam_mass", structure.beam_mass,
+                                 f"in [{lo * m:.4g}, {hi * m:.4g}] kg",
+                                 f"{lo:g} to {hi:g} x the left column's {m:.4g} kg: "
+                                 f"{override_hint('mass_ratio')}")
+
+
+def restitution(structure: Block | Frame, pre: int, post: int) -> float:
+    """phi'^+ / phi'^- [-] of an impact from mechanism ``pre`` into mechanism ``post``
+    (directions +1 or -1): the projection of the impulse-momentum equations on the
+    post-impact mechanism, eta = (j^post . M j^pre) / (j^post . M j^post), with j the bodies'
+    velocity Jacobians at rest and M their masses and inertias (paper, Eqs. 22-28, 36; the
+    derivation is in :mod:`rockbench.analytic.impact`, which uses this function). For
+    ``pre == post`` (no change of pivots) it is 1."""
+    from .mechanism import mechanism
+
+    if isinstance(structure, Block):
+        mass = ((structure.mass, structure.inertia_cm),)
+    else:
+        mass = ((structure.mass_left, structure.inertia_left),
+                (structure.mass_beam, structure.inertia_beam),
+                (structure.mass_right, structure.inertia_right))
+    jpre = mechanism(structure, pre).configuration(0.0).bodies
+    jpost = mechanism(structure, post).configuration(0.0).bodies
+    num = den = 0.0
+    for (m, Ic), a, b in zip(mass, jpre, jpost):
+        num += m * (a.dx * b.dx + a.dy * b.dy) + Ic * a.dtheta * b.dtheta
+        den += m * (b.dx * b.dx + b.dy * b.dy) + Ic * b.dtheta * b.dtheta
+    return num / den
+
+
+def _eta_min(structure: Block | Frame) -> float:
+    """The smaller coefficient of restitution of the two impacts (rocking on clockwise, and
+    counterclockwise) [-]."""
+    return min(restitution(structure, -s, s) for s in (1, -1))
+
+
+def _check_rocks(structure: Block | Frame) -> None:
+    """Refuse a structure whose impact law gives eta < 0: it stops dead at its first impact
+    (it cannot rock), which is outside the model. The error names the width: for a block
+    width <= sqrt(2) height (eta = 1 - 1.5 sin^2 alpha >= 0, alpha <= 54.7 deg); for a frame
+    the widest columns for which this frame's eta (which depends on the beam too) is >= 0."""
+    eta = _eta_min(structure)
+    if eta >= 0.0:
+        return
+    alpha = math.degrees(structure.alpha)
+    if isinstance(structure, Block):
+        name, value, limit = "width", structure.width, math.sqrt(2.0) * structure.height
+        what = f"<= sqrt(2) x height = {limit:.6g} m"
+    else:
+        name, value = "column_width", structure.column_width
+        lo, hi = 1e-3 * value, value
+        if _eta_min(replace(structure, column_width=lo)) < 0.0:
+            what = "narrower (no width of these columns rocks with this beam)"
+        else:
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                if _eta_min(replace(structure, column_width=mid)) >= 0.0:
+                    lo = mid
+                else:
+                    hi = mid
+            what = f"<= {lo:.6g} m for this frame's other fields"
+    raise ParameterError(name, value, what,
+                         f"alpha = {alpha:.4g} deg gives a coefficient of restitution eta = "
+                         f"{eta:.3g} < 0: the structure cannot rock, it stops at its first "
+                         "impact (outside the model; docs/scenes.md)")
+
+
+def _toml_num(x: float) -> str:
+    """A float as TOML: ``repr`` (shortest round-trip form), with a decimal point."""
+    text = repr(float(x))
+    return text if any(c in text for c in ".en") else text + ".0"
+
+
+def _toml_str(text: str) -> str:
+    """A TOML basic string: JSON's escapes, which TOML shares, plus DEL."""
+    return json.dumps(str(text), ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 def _scenario_dir():
@@ -235,6 +419,7 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any] | None) -
     if not overrides:
         return out
     frame_keys = {f.name for f in fields(Frame)} | {f.name for f in fields(Block)} | {"type"}
+    beam = {"mass_ratio": "beam_mass", "beam_mass": "mass_ratio"}  # one replaces the other
     dev_keys = {f.name for f in fields(Devices)}
     if not isinstance(overrides, Mapping):
         raise ParameterError("overrides", overrides, "a dict of key=value scene overrides")
@@ -269,17 +454,29 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any] | None) -
                 tbl.pop(name, None)
             else:
                 tbl[name] = value
+                if table == "structure" and name in beam:
+                    tbl.pop(beam[name], None)
             out[table] = tbl
         else:
             raise SceneError(f"unknown scene table {table!r} in override {key!r}")
     return out
 
 
-def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scene:
-    """Load a built-in scene by name, or a TOML file by path, and apply ``overrides``."""
+def load_scene(name_or_path: "str | os.PathLike | Scene",
+               overrides: Mapping[str, Any] | None = None) -> Scene:
+    """The one resolver of a scene argument: a built-in scene by name, a TOML file by path, or
+    a :class:`Scene` (returned as it is when there are no ``overrides``), with ``overrides``
+    (``key=value``, see :func:`apply_overrides`) applied."""
+    if isinstance(name_or_path, Scene):
+        if not overrides:
+            return name_or_path
+        data = apply_overrides(name_or_path.to_dict(), overrides)
+        return Scene.from_dict(data, source=f"scene {name_or_path.name!r}")
+    if isinstance(name_or_path, os.PathLike) and not isinstance(name_or_path, Path):
+        name_or_path = Path(os.fspath(name_or_path))
     if not isinstance(name_or_path, (str, Path)):
-        raise ParameterError("scene", name_or_path, "a built-in scene name or a path to a "
-                             ".toml file")
+        raise ParameterError("scene", name_or_path, "a built-in scene name, a path to a "
+                             ".toml file or a rockbench.Scene")
     p = Path(name_or_path)
     try:
         is_path = p.suffix == ".toml" or p.exists()
@@ -307,3 +504,31 @@ def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = N
         raise SceneError(f"{source}: not valid TOML: {e}") from None
     data = apply_overrides(data, overrides)
     return Scene.from_dict(data, source=source)
+
+
+def save_scene(scene: Scene, path: str | os.PathLike) -> Path:
+    """Write ``scene`` as a scene file (:meth:`Scene.to_toml`) at ``path`` (a ``.toml`` file;
+    written to a temporary name beside it, then renamed) and return the path.
+    ``load_scene(path) == scene``."""
+    if not isinstance(scene, Scene):
+        raise ParameterError("scene", type(scene).__name__, "a rockbench.Scene")
+    try:
+        p = Path(path)
+    except TypeError:
+        raise ParameterError("path", path, "a path to a .toml file") from None
+    if p.suffix != ".toml":
+        raise ParameterError("path", str(p), "a path ending in .toml",
+                             "load_scene reads a path as a file by that suffix")
+    text = scene.to_toml()
+    tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, p)
+    except OSError as e:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        raise SceneError(f"cannot write scene file {str(p)!r}: "
+                         f"{getattr(e, 'strerror', None) or e}") from None
+    return p

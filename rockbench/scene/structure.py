@@ -14,6 +14,12 @@ Asymmetric Rocking Frame", and ``docs/conventions.md``:
 All lengths are metres, masses kilograms, densities kg/m^3, inertias kg m^2, angles radians.
 Every quantity derived from the geometry (alpha, p, R, pivots, masses, inertias) is computed here
 and nowhere else.
+
+No field takes a value from the paper: the dimensions are required, and the defaults are
+physical (``docs/scenes.md``, generated from :mod:`rockbench.scene.schema`). The paper's frame is
+``load_scene("paper-asymmetric").structure``. These classes check that each field is a positive
+finite number and that the parts fit together; the physical ranges of the fields and the limits
+of the model (eta >= 0, the frame's mechanism) are checked by :class:`rockbench.Scene`.
 """
 
 from __future__ import annotations
@@ -24,8 +30,22 @@ from typing import Any, ClassVar
 
 from ..constants import G
 from ..errors import ParameterError, check_positive
+from .schema import fields_of
 
 __all__ = ["Block", "Frame", "Structure", "check_direction"]
+
+
+def _given(obj: Any, names: tuple[str, ...]) -> None:
+    """Check that the fields ``names`` of ``obj`` are given (not None) and positive finite
+    numbers (stored as float); a missing one raises a ParameterError saying what it is."""
+    table = obj.kind
+    for name in names:
+        value = getattr(obj, name)
+        if value is None:
+            f = next(f for f in fields_of(table) if f.name == name)
+            raise ParameterError(name, "missing", "given", f"{table} field: {f.meaning} [{f.unit}], "
+                                 f"{f.range_text()}; docs/scenes.md")
+        object.__setattr__(obj, name, check_positive(name, value))
 
 
 def _frequency_parameter(R: float) -> float:
@@ -41,25 +61,24 @@ class Block:
     Parameters (all > 0)
     ----------
     width : float
-        Base width 2b [m].
+        Base width 2b [m], required.
     height : float
-        Height 2H [m].
+        Height 2H [m], required.
     depth : float
         Out-of-plane depth [m] (default 1.0).
     density : float
-        Mass density [kg/m^3] (default 2500, concrete).
+        Mass density [kg/m^3] (default 2500, normal-weight concrete).
     """
 
-    width: float = 1.0
-    height: float = 5.0
+    width: float = None  # type: ignore[assignment]  # required: None is refused
+    height: float = None  # type: ignore[assignment]
     depth: float = 1.0
     density: float = 2500.0
 
     kind: ClassVar[str] = "block"
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            object.__setattr__(self, f.name, check_positive(f.name, getattr(self, f.name)))
+        _given(self, tuple(f.name for f in fields(self)))
 
     # --- derived quantities -------------------------------------------------------------
     @property
@@ -112,7 +131,8 @@ class Block:
 class Frame:
     """The planar rocking frame: two rigid columns capped by a rigid beam, joined by contacts only.
 
-    Defaults are the paper's asymmetric frame (H1/H = 0.8).
+    The six dimensions are required (the paper's frame is ``load_scene("paper-asymmetric")``);
+    the beam's mass and radius of gyration default to a uniform solid beam.
 
     Parameters
     ----------
@@ -129,33 +149,50 @@ class Frame:
         Length of the cap beam [m], >= span + column_width (it must cover both column tops).
     beam_height : float
         Depth 2h of the cap beam [m], > 0.
-    beam_gyration_radius : float
-        Polar radius of gyration rho of the beam about its centre of mass [m], > 0
-        (paper: 3.58 m; a uniform 13 m x 2 m rectangle would have 3.80 m).
+    beam_gyration_radius : float or None
+        Polar radius of gyration rho of the beam about its centre of mass [m], > 0. None: a
+        uniform rectangle's, sqrt((beam_width^2 + beam_height^2) / 12) (the paper: 3.58 m
+        for a 13 m x 2 m beam, whose uniform value is 3.80 m).
     depth : float
         Out-of-plane depth of the columns [m] (default 1.0).
     density : float
-        Column mass density [kg/m^3] (default 2500, concrete).
-    mass_ratio : float
-        Beam mass / left column mass [-] (paper: 10, after Mander & Cheng 1997).
+        Column mass density [kg/m^3] (default 2500, normal-weight concrete).
+    mass_ratio : float or None
+        Beam mass / left column mass [-] (the paper: 10, after Mander & Cheng 1997): one way to
+        give the beam's mass.
+    beam_mass : float or None
+        Beam mass m_BC [kg]: the other way. Given with ``mass_ratio``, the two must agree (to
+        1e-9, relative) and ``beam_mass`` is kept. Neither: a solid beam of ``density``,
+        density x beam_width x beam_height x depth.
     """
 
-    column_width: float = 1.0
-    column_height_left: float = 7.0
-    column_height_right: float = 5.6
-    span: float = 8.0
-    beam_width: float = 13.0
-    beam_height: float = 2.0
-    beam_gyration_radius: float = 3.58
+    column_width: float = None  # type: ignore[assignment]  # required: None is refused
+    column_height_left: float = None  # type: ignore[assignment]
+    column_height_right: float = None  # type: ignore[assignment]
+    span: float = None  # type: ignore[assignment]
+    beam_width: float = None  # type: ignore[assignment]
+    beam_height: float = None  # type: ignore[assignment]
+    beam_gyration_radius: float | None = None
     depth: float = 1.0
     density: float = 2500.0
-    mass_ratio: float = 10.0
+    mass_ratio: float | None = None
+    beam_mass: float | None = None
 
     kind: ClassVar[str] = "frame"
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            object.__setattr__(self, f.name, check_positive(f.name, getattr(self, f.name)))
+        _given(self, ("column_width", "column_height_left", "column_height_right", "span",
+                      "beam_width", "beam_height", "depth", "density"))
+        _given(self, tuple(n for n in ("beam_gyration_radius", "mass_ratio", "beam_mass")
+                           if getattr(self, n) is not None))
+        if self.beam_mass is not None and self.mass_ratio is not None:
+            implied = self.beam_mass / self.mass_left
+            if abs(implied - self.mass_ratio) > 1e-9 * self.mass_ratio:
+                raise ParameterError("mass_ratio", self.mass_ratio,
+                                     f"beam_mass / left column mass = {implied:.10g}, or left out",
+                                     f"beam_mass = {self.beam_mass:g} kg is given too, and the "
+                                     f"left column weighs {self.mass_left:g} kg")
+            object.__setattr__(self, "mass_ratio", None)
         if self.column_height_right > self.column_height_left:
             raise ParameterError("column_height_right", self.column_height_right,
                                  f"<= column_height_left = {self.column_height_left:g}",
@@ -245,8 +282,21 @@ class Frame:
 
     @property
     def mass_beam(self) -> float:
-        """Mass m_BC of the beam [kg] = mass_ratio * m_AB."""
-        return self.mass_ratio * self.mass_left
+        """Mass m_BC of the beam [kg]: ``beam_mass``, or ``mass_ratio`` * m_AB, or (neither
+        given) a solid beam, density x beam_width x beam_height x depth."""
+        if self.beam_mass is not None:
+            return self.beam_mass
+        if self.mass_ratio is not None:
+            return self.mass_ratio * self.mass_left
+        return self.density * self.beam_width * self.beam_height * self.depth
+
+    @property
+    def rho(self) -> float:
+        """Polar radius of gyration of the beam [m]: ``beam_gyration_radius``, or a uniform
+        rectangle's sqrt((beam_width^2 + beam_height^2) / 12)."""
+        if self.beam_gyration_radius is not None:
+            return self.beam_gyration_radius
+        return math.sqrt((self.beam_width**2 + self.beam_height**2) / 12.0)
 
     @property
     def inertia_left(self) -> float:
@@ -261,7 +311,7 @@ class Frame:
     @property
     def inertia_beam(self) -> float:
         """I^G_BC = m_BC rho^2 [kg m^2]."""
-        return self.mass_beam * self.beam_gyration_radius**2
+        return self.mass_beam * self.rho**2
 
     @property
     def gamma(self) -> float:
@@ -305,7 +355,10 @@ class Frame:
         return math.hypot(gx - B[0], gy - B[1]), math.atan2(gy - B[1], gx - B[0])
 
     def to_dict(self) -> dict[str, Any]:
-        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        """The fields as a scene file's ``[structure]`` table (optional fields left as None,
+        i.e. at their default, are left out)."""
+        d = {f.name: getattr(self, f.name) for f in fields(self)
+             if getattr(self, f.name) is not None}
         d["type"] = self.kind
         return d
 

@@ -25,14 +25,15 @@ from rockbench.scene.mechanism import FrameMechanism, geometric_limit
 from rockbench.constants import G
 from rockbench.errors import ParameterError
 from rockbench.scene.devices import Devices
+from rockbench.scene.scene import load_scene
 from rockbench.scene.structure import Frame
 
 FAST = settings(max_examples=25, deadline=None)
 
-ASYM = Frame()                              # paper's asymmetric frame, H1/H = 0.8
-SYM = Frame(column_height_right=7.0)        # paper's symmetric frame
+ASYM = load_scene("paper-asymmetric").structure     # paper's asymmetric frame, H1/H = 0.8
+SYM = load_scene("paper-symmetric").structure       # paper's symmetric frame
 FRAMES = {"asymmetric": ASYM, "symmetric": SYM}
-DEV = Devices()                             # k = 23.5 MN/m, C = 25.3 MN s/m
+DEV = load_scene("paper-asymmetric-hybrid").devices  # k = 23.5 MN/m, C = 25.3 MN s/m
 K, C = DEV.tendon_stiffness, DEV.damping
 ALPHA = ASYM.alpha
 # rotations from rest [rad] at which every form is checked (x alpha), both directions
@@ -291,7 +292,7 @@ def test_eq18_corrected_terms_equal_derivation(name, f, s):
        k=st.floats(1e5, 1e8), c=st.floats(1e5, 1e8))
 def test_eq18_corrected_terms_random_frames(f, frac, s, k, c):
     phi = reachable(f, s, frac)
-    dev = Devices(tendon_stiffness=k, damping=c)
+    dev = replace(DEV, tendon_stiffness=k, damping=c)
     d = Dynamics(f, s, dev).terms(phi)
     p = P.terms(f, s, phi, dev)
     scale = {"inertia": d.inertia, "velocity": d.inertia, "gravity": abs(d.ground),
@@ -556,7 +557,7 @@ def test_eq36_each_lower_sign_correction_is_needed():
     assert P._eta_eq36(SYM, -1, fix_a4=False, fix_a9=True) == pytest.approx(eta(SYM, -1),
                                                                            rel=1e-13)
     # H1/H = 2/7, L = 2 m: the a4 error alone moves eta by -0.028
-    odd = Frame(column_height_right=2.0, span=2.0, beam_width=4.0)
+    odd = replace(ASYM, column_height_right=2.0, span=2.0, beam_width=4.0)
     e = eta(odd, -1)
     assert P.eta_eq36(odd, -1) == pytest.approx(e, rel=1e-12)
     assert P._eta_eq36(odd, -1, fix_a4=False, fix_a9=True) - e == pytest.approx(-0.02825,

@@ -85,13 +85,15 @@ def test_device_forces_do_the_analytic_virtual_work(name, damper):
             ds = dyn.device_state(dyn.configuration(phi))
             st = mech_state(scene, phi, phidot)
             # tendons alone
-            tend = rb.Scene(scene.structure, rb.Devices(tendon_stiffness=k, damping=0.0))
+            tend = rb.Scene(scene.structure, rb.Devices(tendon_stiffness=k, tendon_length=8.5,
+                                                        fracture_strain=None, damping=0.0))
             f_t, ten, _ = DeviceGeometry(tend, body_specs(tend), damper).forces(st)
             want = -k * (ds.elong_left * ds.delong_left + ds.elong_right * ds.delong_right)
             assert point_power(f_t, st) == pytest.approx(want * phidot, rel=1e-9, abs=1e-6)
             assert ten == pytest.approx([k * ds.elong_left, k * ds.elong_right], rel=1e-9)
             # dampers alone
-            damp = rb.Scene(scene.structure, rb.Devices(tendon_stiffness=0.0, damping=c))
+            damp = rb.Scene(scene.structure, rb.Devices(tendon_stiffness=0.0, tendon_length=8.5,
+                                                        fracture_strain=None, damping=c))
             f_d, _, dmp = DeviceGeometry(damp, body_specs(damp), damper).forces(st)
             want = -c * (ds.dchord_left ** 2 + ds.dchord_right ** 2) * phidot ** 2
             assert point_power(f_d, st) == pytest.approx(want, rel=1e-9, abs=1e-6)

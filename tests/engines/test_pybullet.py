@@ -149,10 +149,11 @@ def test_positive_ground_acceleration_uplifts_counterclockwise(block):
 # --- friction, masses, forces -------------------------------------------------------------
 @pytest.mark.parametrize("mu", [0.3, 0.6])
 def test_pair_friction_is_settings_friction(mu):
-    """A squat block (no tipping: b/H = 10) sliding under a horizontal 'gravity' gx > mu g
-    accelerates at |gx| - mu g, and sticks when |gx| < mu g: the pair's coefficient is
-    settings.friction, although Bullet multiplies the two bodies' coefficients."""
-    sc = Scene(Block(width=2.0, height=0.2))
+    """A squat block (no tipping: b/H = 1.4, the widest a scene accepts, tips only beyond
+    gx = 1.4 g) sliding under a horizontal 'gravity' gx > mu g accelerates at |gx| - mu g, and
+    sticks when |gx| < mu g: the pair's coefficient is settings.friction, although Bullet
+    multiplies the two bodies' coefficients."""
+    sc = Scene(Block(width=1.4, height=1.0))
     b = _built(sc, friction=mu)
     infos = [pb.getDynamicsInfo(b._bodies[0], 2, physicsClientId=b._cid)[1]]
     infos += [pb.getDynamicsInfo(s, -1, physicsClientId=b._cid)[1] for s in b._static]

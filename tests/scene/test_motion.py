@@ -15,7 +15,11 @@ from scipy.optimize import minimize_scalar
 from rockbench.constants import G, G_STANDARD
 from rockbench.errors import ParameterError
 from rockbench.scene.motion import Record, RickerPulse, antisymmetric_beta, make_pulse
+from rockbench.scene.scene import load_scene
 from rockbench.scene.structure import Block, Frame
+
+PAPER = load_scene("paper-asymmetric").structure      # a Frame: the paper's, written out
+HOUSNER = load_scene("housner-block").structure       # a Block
 
 SHAPES = ("symmetric", "antisymmetric")
 FAST = settings(max_examples=60, deadline=None)
@@ -193,7 +197,7 @@ def test_pulse_max_abs_after_matches_brute_force(shape):
 
 
 # --- dimensionless construction ----------------------------------------------------------------
-@pytest.mark.parametrize("structure", [Frame(), Block()])
+@pytest.mark.parametrize("structure", [PAPER, HOUSNER])
 def test_dimensionless_pulse(structure):
     A, W = 3.5, 2.0
     p = RickerPulse.dimensionless(A, W, structure, "antisymmetric", -1)
@@ -219,12 +223,12 @@ def test_make_pulse_from_amplitude_and_period():
 
 
 @pytest.mark.parametrize("kwargs, missing", [
-    ({"A": 1.0, "structure": Frame()}, "W"),
-    ({"W": 1.0, "structure": Frame()}, "A"),
+    ({"A": 1.0, "structure": PAPER}, "W"),
+    ({"W": 1.0, "structure": PAPER}, "A"),
     ({"A": 1.0, "W": 1.0}, "structure"),
     ({"amplitude": 1.0}, "period"),
     ({"period": 1.0}, "amplitude"),
-    ({"A": 1.0, "W": 1.0, "structure": Frame(), "amplitude": 1.0}, "amplitude"),
+    ({"A": 1.0, "W": 1.0, "structure": PAPER, "amplitude": 1.0}, "amplitude"),
     ({}, "A"),
 ])
 def test_make_pulse_names_what_is_wrong(kwargs, missing):
@@ -272,9 +276,9 @@ def test_bad_amplitude_or_period_is_named(bad):
     with pytest.raises(ParameterError, match="period"):
         RickerPulse(1.0, bad)
     with pytest.raises(ParameterError, match="A"):
-        RickerPulse.dimensionless(bad, 1.0, Frame())
+        RickerPulse.dimensionless(bad, 1.0, PAPER)
     with pytest.raises(ParameterError, match="W"):
-        RickerPulse.dimensionless(1.0, bad, Frame())
+        RickerPulse.dimensionless(1.0, bad, PAPER)
 
 
 @FAST

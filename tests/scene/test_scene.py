@@ -4,6 +4,7 @@ overrides, and the errors bad scene input gives (each names the parameter and it
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 from hypothesis import given, settings
@@ -20,6 +21,15 @@ REQUIRED = ("paper-asymmetric", "paper-symmetric", "paper-asymmetric-hybrid",
             "paper-asymmetric-hybrid-eps2", "paper-asymmetric-hybrid-eps1",
             "paper-symmetric-hybrid", "housner-block")
 NON_FINITE = st.sampled_from([math.nan, math.inf, -math.inf])
+#: the paper's frame and devices, written out (the classes have no paper defaults)
+PAPER_FRAME = Frame(column_width=1.0, column_height_left=7.0, column_height_right=5.6, span=8.0,
+                    beam_width=13.0, beam_height=2.0, beam_gyration_radius=3.58, mass_ratio=10.0)
+PAPER_DEVICES = {"tendon_stiffness": 23.5e6, "tendon_length": 8.5, "damping": 25.3e6,
+                 "fracture_strain": None}
+
+
+def dev(**changes) -> Devices:
+    return Devices(**{**PAPER_DEVICES, **changes})
 
 
 def check_error(err: ParameterError, name: str, valid: str | None = None) -> None:
@@ -56,18 +66,20 @@ def test_every_builtin_scene_loads(name):
 
 def test_builtin_scene_contents():
     asym, sym = load_scene("paper-asymmetric"), load_scene("paper-symmetric")
-    assert asym.structure == Frame() and asym.devices is None and not asym.has_devices
-    assert sym.structure == Frame(column_height_right=7.0) and sym.structure.symmetric
+    assert asym.structure == PAPER_FRAME and asym.devices is None and not asym.has_devices
+    assert sym.structure == replace(PAPER_FRAME, column_height_right=7.0)
+    assert sym.structure.symmetric
     assert load_scene("housner-block").structure == Block(width=1.0, height=5.0)
     paper_devices = {"tendon_stiffness": 23.5e6, "tendon_length": 8.5, "damping": 25.3e6}
     for name, eps in (("paper-asymmetric-hybrid", None), ("paper-asymmetric-hybrid-eps2", 0.02),
                       ("paper-asymmetric-hybrid-eps1", 0.01)):
         sc = load_scene(name)
-        assert sc.structure == Frame()
+        assert sc.structure == PAPER_FRAME
         assert sc.devices == Devices(**paper_devices, fracture_strain=eps)
         assert sc.has_devices
     sh = load_scene("paper-symmetric-hybrid")
-    assert sh.structure.symmetric and sh.devices == Devices(**paper_devices)
+    assert sh.structure.symmetric and sh.devices == Devices(**paper_devices,
+                                                             fracture_strain=None)
 
 
 def test_scene_from_a_file_and_round_trip(tmp_path):
@@ -79,6 +91,7 @@ def test_scene_from_a_file_and_round_trip(tmp_path):
 name = "my-frame"
 description = "a test frame"
 fall_angle = 0.5
+preset = "paper"
 [structure]
 type = "frame"
 column_height_right = 6.0
@@ -87,8 +100,8 @@ tendon_stiffness = 1e6
 """)
     mine = load_scene(p)
     assert mine.name == "my-frame" and mine.fall_angle == 0.5
-    assert mine.structure == Frame(column_height_right=6.0)
-    assert mine.devices == Devices(tendon_stiffness=1e6)
+    assert mine.structure == replace(PAPER_FRAME, column_height_right=6.0)
+    assert mine.devices == dev(tendon_stiffness=1e6)
     assert mine.fall_angles == {1: 0.5, -1: 0.5}
     assert load_scene(str(p)) == mine
 
@@ -98,7 +111,7 @@ tendon_stiffness = 1e6
 def test_span_override(key):
     sc = load_scene("paper-asymmetric", {key: "9"})
     assert sc.structure.span == 9.0
-    assert sc.structure == Frame(span=9.0)
+    assert sc.structure == replace(PAPER_FRAME, span=9.0)
     assert load_scene("paper-asymmetric", {key: 9}).structure.span == 9.0
 
 
@@ -175,13 +188,15 @@ def test_unknown_structure_type(tmp_path):
 
 def test_devices_on_a_block_are_rejected(tmp_path):
     with pytest.raises(ParameterError) as e:
-        Scene(Block(), Devices())
+        Scene(Block(width=1.0, height=5.0), dev())
     check_error(e.value, "devices", "absent for a block")
     with pytest.raises(ParameterError) as e:
-        load_scene(write(tmp_path, '[structure]\ntype = "block"\n[devices]\ndamping = 1e6\n'))
+        load_scene(write(tmp_path, '[structure]\ntype = "block"\nwidth = 1.0\nheight = 5.0\n'
+                                   '[devices]\ntendon_stiffness = 0.0\ntendon_length = 1.0\n'
+                                   'fracture_strain = "none"\ndamping = 1e6\n'))
     check_error(e.value, "devices")
     with pytest.raises(ParameterError) as e:
-        Scene(Frame(), devices={"damping": 1.0})  # type: ignore[arg-type]
+        Scene(PAPER_FRAME, devices={"damping": 1.0})  # type: ignore[arg-type]
     check_error(e.value, "devices", "Devices")
     with pytest.raises(ParameterError) as e:
         Scene("frame")  # type: ignore[arg-type]
@@ -193,7 +208,7 @@ def test_devices_on_a_block_are_rejected(tmp_path):
                                                          allow_infinity=False), NON_FINITE))
 def test_bad_fall_angle(bad):
     with pytest.raises(ParameterError) as e:
-        Scene(Frame(), fall_angle=bad)
+        Scene(PAPER_FRAME, fall_angle=bad)
     check_error(e.value, "fall_angle")
 
 
@@ -202,7 +217,7 @@ def test_bad_fall_angle(bad):
 @given(bad=st.one_of(st.floats(max_value=0.0), NON_FINITE))
 def test_bad_fracture_strain(bad):
     with pytest.raises(ParameterError) as e:
-        Devices(fracture_strain=bad)
+        dev(fracture_strain=bad)
     check_error(e.value, "fracture_strain", None if not math.isfinite(bad) else "> 0")
 
 
@@ -210,7 +225,7 @@ def test_bad_fracture_strain(bad):
 @given(bad=st.floats(min_value=1.0, allow_infinity=False))
 def test_fracture_strain_of_one_or_more_is_rejected(bad):
     with pytest.raises(ParameterError) as e:
-        Devices(fracture_strain=bad)
+        dev(fracture_strain=bad)
     check_error(e.value, "fracture_strain", "(0, 1)")
 
 
@@ -219,7 +234,7 @@ def test_fracture_strain_of_one_or_more_is_rejected(bad):
        bad=st.one_of(st.floats(max_value=-1e-300), NON_FINITE))
 def test_negative_or_non_finite_device_constants(name, bad):
     with pytest.raises(ParameterError) as e:
-        Devices(**{name: bad})
+        dev(**{name: bad})
     check_error(e.value, name, ">= 0" if math.isfinite(bad) else None)
 
 
@@ -227,26 +242,35 @@ def test_negative_or_non_finite_device_constants(name, bad):
 @given(bad=st.one_of(st.floats(max_value=0.0), NON_FINITE))
 def test_bad_tendon_length(bad):
     with pytest.raises(ParameterError) as e:
-        Devices(tendon_length=bad)
+        dev(tendon_length=bad)
     check_error(e.value, "tendon_length")
 
 
-def test_devices_defaults_and_flags():
-    d = Devices()
-    assert (d.tendon_stiffness, d.tendon_length, d.damping, d.fracture_strain) == (
-        23.5e6, 8.5, 25.3e6, None)
+@pytest.mark.parametrize("name", list(PAPER_DEVICES))
+def test_every_device_parameter_is_required(name):
+    """No device parameter silently takes the paper's value (fracture_strain too: None, no
+    fracture, is said, not assumed)."""
+    with pytest.raises(ParameterError) as e:
+        Devices(**{k: v for k, v in PAPER_DEVICES.items() if k != name})
+    check_error(e.value, name, "given")
+
+
+def test_device_flags():
+    d = dev()
     assert d.has_tendons and d.has_dampers
-    none = Devices(tendon_stiffness=0.0, damping=0.0)
+    none = dev(tendon_stiffness=0.0, damping=0.0)
     assert not none.has_tendons and not none.has_dampers
-    assert not Scene(Frame(), none).has_devices
+    assert not Scene(PAPER_FRAME, none).has_devices
 
 
 def test_bad_values_in_a_scene_file_name_the_parameter(tmp_path):
-    p = write(tmp_path, '[structure]\ntype = "frame"\ncolumn_height_right = 8.0\n')
+    p = write(tmp_path, 'preset = "paper"\n[structure]\ntype = "frame"\n'
+                        'column_height_right = 8.0\n')
     with pytest.raises(ParameterError) as e:
         load_scene(p)
     check_error(e.value, "column_height_right", "column_height_left")
-    p = write(tmp_path, '[structure]\n[devices]\nfracture_strain = 0.0\n', "b.toml")
+    p = write(tmp_path, 'preset = "paper"\n[structure]\ntype = "frame"\n[devices]\n'
+                        'fracture_strain = 0.0\n', "b.toml")
     with pytest.raises(ParameterError) as e:
         load_scene(p)
     check_error(e.value, "fracture_strain", "> 0")
@@ -262,4 +286,4 @@ def test_frame_whose_mechanism_breaks_before_alpha_is_refused():
                   beam_width=4.5, beam_height=1.0, beam_gyration_radius=1.0, mass_ratio=1.0)
     with pytest.raises(ParameterError, match="structure.*mechanism holds up to"):
         Scene(structure=squat)
-    Scene(structure=Frame())  # the paper's frame is fine
+    Scene(structure=PAPER_FRAME)  # the paper's frame is fine
