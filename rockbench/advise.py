@@ -1,25 +1,37 @@
-"""``rockbench advise``: which engine, which setting, for a tolerance, at what cost.
+"""``rockbench advise``: which engine, which setting, for a tolerance, at what cost - chosen on
+one part of the scene's evidence and confirmed on another.
 
 :func:`advise` answers from measurements on the user's scene (a built-in name, a scene file or a
-:class:`~rockbench.scene.scene.Scene`): for every engine it runs the validation set of
-:mod:`rockbench.tradeoff` at time steps from the largest down (:data:`ADVISE_DTS`), and stops
-at the first setting whose **worst validation error** (:func:`rockbench.tradeoff.case_error`:
-|peak error| of every surviving pulse, eta error of every free-rocking impact, infinite for a run
-that is not ok or gets the overturning verdict wrong) is within the tolerance. Because the cost
-of a run grows as its step shrinks (every measurement in ``docs/choosing.md``), that first
-passing setting is the engine's cheapest; finer steps are not run. Engines are ranked by cost
-(process CPU seconds per simulated second, median of the repeats); engines that reach the
-tolerance at no step tried are listed with the best error they reached and where; engines that
-cannot run here with the reason.
+:class:`~rockbench.scene.scene.Scene`). The evidence (:func:`rockbench.validation.validation_set`:
+free rocking from small and large angles, pulse cells over the scene's whole A-W plane, near and
+away from its overturning boundary, scaled records) is split, deterministically, into a
+**choice** part and a **held-out** part. For every engine:
 
-:func:`decide` is the pure part (a tradeoff table and a tolerance in, the advice out), so the
-choice can be tested on a controlled table and the report can turn any tradeoff table into
-advice (:func:`advice_for_report`).
+1. **choose**: the engine's precision knob (the time step ``dt``, or what its backend class
+   declares as ``precision_knob`` with the values ``precision_ladder``) is run from the coarsest
+   value down on the choice part; the worst validation error of each
+   (:func:`rockbench.tradeoff.case_error`) is recorded;
+2. **converge** (:func:`convergence`): a value is accepted only when the next finer one also
+   meets the tolerance and the error falls as the step falls (or the two agree with each
+   other within a quarter of the tolerance: converged); a lucky step - within the tolerance
+   with a finer step outside it - is not. An error curve that rises at a finer step is named
+   "erratic" in the answer;
+3. **confirm**: the accepted setting runs on the held-out part; the recommendation stands
+   only if the held-out worst error is within the tolerance (status "meets"); otherwise the
+   engine is listed as "fails held-out" with both figures.
 
-Runs are reused through the store (``store``: a directory; :mod:`rockbench.sweep.store`, the
-project's one store, under ``<store>/<code fingerprint>/tradeoff/``: a run is keyed by the
-scene's data, the validation case, the engine, its settings and the repeat count, and by the
-fingerprint of the code that decides its physics, so results of other code are never reused).
+With ``contact=True`` (``--full``), the contact parameters that decide the impact (each engine's
+:data:`CONTACT_VARIANTS`) are measured first, one at a time from the defaults, on the
+free-rocking impacts and the smallest-uplift record of the choice part; the variants that lower
+that error, alone and combined, get their own ladder, and the cheapest setting that meets the
+tolerance wins whatever its contact parameters.
+
+**Cost** is steady-state process CPU seconds per simulated second (the model build of every
+run and each process's one-off warm-up measured apart and shown beside it, never ranked):
+:mod:`rockbench.tradeoff`. Engines are ranked by it; those within :data:`TIE` of the cheapest
+are a tie. :func:`decide` is the pure part (a tradeoff table and a tolerance in, the ranking
+out), so the rule is tested on controlled tables and the report turns any tradeoff table into
+advice (:func:`advice_for_report`). Runs are reused through the one store (``store``).
 """
 
 from __future__ import annotations
@@ -28,154 +40,257 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Sequence
 
+import numpy as np
 import pandas as pd
 
 from .errors import ParameterError
 
-__all__ = ["ADVISE_DTS", "QUICK_DTS", "Advice", "advise", "decide", "advice_for_report"]
+__all__ = ["ADVISE_DTS", "QUICK_DTS", "CONTACT_VARIANTS", "Advice", "advise", "decide",
+           "convergence", "held_out_stats", "advice_for_report", "precision_knob",
+           "setting_args"]
 
 #: Time steps [s] tried, largest first.
 ADVISE_DTS: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
-#: Engines whose cheapest passing setting costs at most this factor x the cheapest one's are
-#: marked ``tie_with_cheapest``. On the shared 2-core machine of docs/choosing.md the repeats of
-#: one sweep agreed within 2 %, but the same setting measured in sweeps 35 minutes apart moved
-#: by up to 40 % (pymunk, dt 2e-3: 0.0123 and 0.0088 CPU s per simulated s; CPU time still
-#: depends on what shares the core), so a smaller difference is not a ranking.
+#: Time steps [s] tried with ``quick`` (the same ladder: a quick answer obeys the same rule).
+QUICK_DTS: tuple[float, ...] = ADVISE_DTS
+#: Engines whose cost is within this factor of the cheapest are a tie (CPU time of one setting
+#: moved by up to 40 % between sweeps 35 minutes apart on the shared machine:
+#: docs/choosing.md).
 TIE = 1.25
-#: Time steps [s] tried with ``quick``.
-QUICK_DTS: tuple[float, ...] = (4e-3, 2e-3, 1e-3)
+#: Convergence: two successive steps agreeing within this fraction of the tolerance are
+#: converged, whatever the direction of the change; an error that grows by more than
+#: ERRATIC_FACTOR at a finer step (and exceeds ERRATIC_FLOOR x the tolerance) is erratic.
+CONVERGED_FRACTION = 0.25
+ERRATIC_FACTOR = 1.5
+ERRATIC_FLOOR = 0.5
 
-_EVIDENCE = ["engine", "setting", "dt", "worst_error", "verdict", "peak_error_worst",
-             "eta_error_worst", "nrmse_worst", "verdicts_agree", "n_ok", "n_cases",
-             "cpu_per_sim_s", "cpu_per_sim_s_min", "cpu_per_sim_s_max", "real_time_factor"]
+#: The contact parameters searched with ``contact=True`` (one override set each, from the
+#: engine's defaults), per engine: those that decide the impact's eta and small uplifts. Each
+#: is a field of the engine's Settings (validated there).
+CONTACT_VARIANTS: dict[str, list[dict[str, Any]]] = {
+    "mujoco": [{"contact_dampratio": 1.0}, {"contact_dampratio": 4.0},
+               {"impedance": 0.95}, {"impedance": 0.999}, {"impratio": 1.0},
+               {"impratio": 10.0}, {"noslip_iterations": 10}],
+    "pybullet": [{"contact_erp": 0.2}, {"contact_erp": 0.02}, {"solver_iterations": 150},
+                 {"contact_breaking_threshold": 1e-4}],
+    "pymunk": [{"iterations": 60}, {"iterations": 100}, {"collision_slop": 1e-4},
+               {"collision_slop": 1e-3}, {"collision_bias": 0.9 ** 300}],
+    "opensees": [{"toe_stiffness": 1e11}, {"toe_stiffness": 1e12}, {"integrator": "hht",
+                                                                     "hht_alpha": 0.9},
+                 {"damping": "stiffness"}],
+}
+
+_EVIDENCE = ["engine", "setting", "dt", "worst_error_choice", "worst_error_heldout",
+             "worst_error", "verdict", "peak_error_worst", "eta_error_worst", "nrmse_worst",
+             "near_disagree", "outside_band", "n_ok", "n_cases", "n_choice", "n_heldout",
+             "cpu_per_sim_s", "cpu_per_sim_s_min", "cpu_per_sim_s_max", "real_time_factor",
+             "build_cpu_s", "warmup_cpu_s"]
 
 
-@dataclass
-class Advice:
-    """The answer of :func:`advise` (JSON: :meth:`to_json`).
+def precision_knob(engine: str) -> tuple[str, tuple[float, ...]]:
+    """(name, values from coarse to fine) of ``engine``'s precision knob: its backend class's
+    ``precision_knob`` and ``precision_ladder`` attributes when it declares them (e.g. an
+    error-controlled integrator's accuracy), else ``("dt", ADVISE_DTS)``."""
+    from .engines import get_backend
 
-    scene, tolerance [-] (relative: 0.02 = 2 %);
-    ranking : one dict per engine considered, the engines that meet the tolerance first
-        (cheapest first), then those that cannot (smallest error first), then the unavailable:
-        ``engine``, ``meets`` (bool), ``status`` ("meets", "cannot reach", "unavailable"),
-        ``setting`` / ``dt`` [s] / ``worst_error`` [-] / ``cpu_per_sim_s`` [s/s] /
-        ``real_time_factor`` [-] (the cheapest passing setting; for an engine that cannot reach
-        the tolerance: its best setting), ``reason`` (why it cannot, in words),
-        ``tie_with_cheapest`` (engines that meet it: cost within :data:`TIE` of the cheapest);
-    considered : every engine name considered, in the order given;
-    evidence : the tradeoff rows behind the answer (every setting run);
-    quick : whether the reduced validation set was used; cases : the validation set;
-    machine : where the cost was measured.
-    """
+    cls = get_backend(engine)
+    knob = getattr(cls, "precision_knob", "dt") or "dt"
+    ladder = getattr(cls, "precision_ladder", None)
+    if ladder is None:
+        ladder = ADVISE_DTS
+    return str(knob), tuple(float(v) for v in ladder)
 
-    scene: str
-    tolerance: float
-    ranking: list[dict[str, Any]]
-    considered: list[str]
-    evidence: pd.DataFrame
-    quick: bool = False
-    cases: list[dict[str, Any]] = field(default_factory=list)
-    machine: dict[str, Any] = field(default_factory=dict)
 
-    @property
-    def recommended(self) -> dict[str, Any] | None:
-        """The cheapest engine and setting within the tolerance (None if none)."""
-        return self.ranking[0] if self.ranking and self.ranking[0]["meets"] else None
+# =========================================================================================
+# The rules (pure)
+# =========================================================================================
+def convergence(errors: Sequence[tuple[float, float]], tolerance: float) -> dict[str, Any]:
+    """The convergence rule on one error curve.
 
-    def to_json(self) -> dict[str, Any]:
-        from .result import _jsonable
+    ``errors``: (step, worst error [-]) pairs (any order; sorted here from the largest step
+    down). Returns ``{"index": i or None, "step": the accepted step or None, "status",
+    "erratic": bool, "curve": str, "note": str}``: the accepted step is the largest one within
+    ``tolerance`` whose next finer step is also within it and either no larger (the error falls
+    as the step falls) or within :data:`CONVERGED_FRACTION` x tolerance of it (converged).
+    status: "converged", "unconfirmed" (within the tolerance only at the finest step run: a
+    finer one is needed), "lucky steps only" (within it only at steps whose finer neighbour is
+    not) or "cannot reach". ``erratic``: the error grows by more than :data:`ERRATIC_FACTOR` at
+    a finer step and above :data:`ERRATIC_FLOOR` x tolerance somewhere on the curve."""
+    pts = sorted(((float(s), float(e)) for s, e in errors), key=lambda p: -p[0])
+    curve = ", ".join(f"{_pct(e)} at {s:g}" for s, e in pts)
+    erratic = any(e2 > ERRATIC_FACTOR * e1 and e2 > ERRATIC_FLOOR * tolerance
+                  for (_, e1), (_, e2) in zip(pts, pts[1:]) if math.isfinite(e1))
+    out = {"index": None, "step": None, "status": "cannot reach", "erratic": erratic,
+           "curve": curve, "note": ""}
+    lucky = []
+    for i, (s, e) in enumerate(pts):
+        if not e <= tolerance:
+            continue
+        if i + 1 == len(pts):
+            out["status"] = "unconfirmed"
+            out["note"] = f"within the tolerance at {s:g}, the finest step run: no finer " \
+                          "step confirms it"
+            break
+        e2 = pts[i + 1][1]
+        if e2 <= tolerance and (e2 <= e or abs(e2 - e) <= CONVERGED_FRACTION * tolerance):
+            out.update(index=i, step=s, status="converged",
+                       note=f"next finer step {pts[i + 1][0]:g}: {_pct(e2)}")
+            break
+        lucky.append(s)
+    if out["status"] != "converged" and lucky:
+        out["note"] = (out["note"] + "; " if out["note"] else "") + \
+            "lucky step(s) not accepted: " + ", ".join(f"{s:g}" for s in lucky)
+        if out["status"] == "cannot reach":
+            out["status"] = "lucky steps only"
+    if erratic:
+        out["note"] = (out["note"] + "; " if out["note"] else "") + \
+            f"erratic error against the step ({curve})"
+    return out
 
-        ev = self.evidence[[c for c in _EVIDENCE if c in self.evidence.columns]]
-        return _jsonable({
-            "scene": self.scene, "tolerance": self.tolerance, "quick": self.quick,
-            "recommended": self.recommended, "ranking": self.ranking,
-            "considered": self.considered,
-            "error_definition": "worst over the validation set of |peak error| (surviving "
-                                "pulses) and eta error (free rocking); inf if a run is not ok "
-                                "or its overturning verdict is wrong",
-            "cost_definition": "process CPU s per simulated s, median of repeats (whole run: "
-                               "build, stepping, Python loop, post-processing)",
-            "evidence": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                          for k, v in r.items()} for r in ev.to_dict("records")],
-            "cases": self.cases, "machine": self.machine})
 
-    def text(self) -> str:
-        """A short human answer: the recommendation, then every engine's line."""
-        lines = [f"Scene {self.scene}, tolerance {100 * self.tolerance:g} % "
-                 f"(worst validation error{', quick set' if self.quick else ''}):"]
-        rec = self.recommended
-        if rec:
-            lines.append(f"  use {rec['engine']} at {rec['setting']}: worst error "
-                         f"{100 * rec['worst_error']:.3g} %, {rec['cpu_per_sim_s']:.3g} CPU s "
-                         f"per simulated s (real-time factor {rec['real_time_factor']:.3g})")
-            ties = [r["engine"] for r in self.ranking[1:] if r.get("tie_with_cheapest")]
-            if ties:
-                lines.append(f"  (as cheap within {100 * (TIE - 1):.0f} %, a tie on this "
-                             f"machine: {', '.join(ties)})")
-        else:
-            lines.append("  no engine reaches this tolerance at the settings tried")
-        for i, r in enumerate(self.ranking, 1):
-            if r["status"] == "meets":
-                lines.append(f"  {i}. {r['engine']}: {r['setting']}, error "
-                             f"{100 * r['worst_error']:.3g} %, {r['cpu_per_sim_s']:.3g} CPU s/s, "
-                             f"rtf {r['real_time_factor']:.3g}")
-            else:
-                lines.append(f"  {i}. {r['engine']}: {r['status']}: {r['reason']}")
-        return "\n".join(lines)
+def held_out_stats(runs: pd.DataFrame, tolerance: float) -> dict[str, Any]:
+    """On the held-out runs of one setting (rows of :data:`rockbench.tradeoff.RUN_COLUMNS`):
+    ``n`` (counted runs), ``beyond`` (fraction of them with error > tolerance), ``beyond2``
+    (count with error > 2 x tolerance), ``wrong_verdicts`` (away from the boundary, or not ok),
+    ``near_disagree`` (near the boundary: reported, not counted), ``outside_band`` (records)."""
+    h = runs[runs["part"] == "held-out"] if "part" in runs else runs.iloc[0:0]
+    e = h["error"].to_numpy(dtype=float)
+    counted = e[~np.isnan(e)]
+    va = h["verdict_agrees"].astype(object).where(h["verdict_agrees"].notna(), True)
+    near = h["near_boundary"].fillna(False).astype(bool)
+    return {"n": int(counted.size),
+            "beyond": float(np.mean(counted > tolerance)) if counted.size else math.nan,
+            "beyond2": int(np.sum(counted > 2 * tolerance)),
+            "wrong_verdicts": int(np.sum(np.isinf(counted))),
+            "near_disagree": int((near & ~va.astype(bool)).sum()),
+            "outside_band": int((h["kind"].eq("record") & h["in_band"].eq(False)).sum())
+            if "in_band" in h else 0}
+
+
+def _pct(e: float) -> str:
+    return "inf" if not math.isfinite(e) else f"{100 * e:.3g} %"
 
 
 def _fmt_err(e: float) -> str:
     return "inf (a run not ok or a wrong verdict)" if not math.isfinite(e) else f"{100 * e:.3g} %"
 
 
+def _variant(label: str, knob: str = "dt") -> str:
+    """The setting label without its precision knob (the contact variant): "" for defaults."""
+    return ",".join(p for p in str(label).split(",") if not p.startswith(f"{knob}="))
+
+
+def _num(x: Any) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return math.nan
+    return v
+
+
 def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | None = None,
-           unavailable: dict[str, str] | None = None) -> list[dict[str, Any]]:
+           unavailable: dict[str, str] | None = None, knobs: dict[str, str] | None = None
+           ) -> list[dict[str, Any]]:
     """The ranking of :class:`Advice` from a tradeoff table (:data:`rockbench.tradeoff.
-    TABLE_COLUMNS`: at least engine, setting, dt, worst_error, cpu_per_sim_s,
-    real_time_factor): per engine the cheapest setting (smallest ``cpu_per_sim_s``; ties: the
-    larger dt) with ``worst_error <= tolerance``; engines without one get their smallest
-    error. ``engines``: the engines considered (default: those in the table), each gets a row;
-    ``unavailable``: engine -> why it could not run."""
+    TABLE_COLUMNS`: at least engine, setting, dt, worst_error [, worst_error_choice,
+    worst_error_heldout], cpu_per_sim_s, real_time_factor).
+
+    Per engine and contact variant (the setting label without the knob): the error curve on
+    the choice part (``worst_error_choice``, else ``worst_error``) goes through
+    :func:`convergence`; the accepted setting meets the tolerance when its held-out worst error
+    (``worst_error_heldout``; a table without it: the choice error) is within it. Per engine
+    the cheapest variant that meets it (ties of cost: the larger step) is kept; an engine without
+    one gets its most informative failure: "fails held-out" (accepted, refused by the held-out
+    part), "unconfirmed", "lucky steps only" or "cannot reach". ``engines``: the engines
+    considered (default: those in the table); ``unavailable``: engine -> why it could not run;
+    ``knobs``: engine -> the name of its precision knob (default dt)."""
     tolerance = _check_tolerance(tolerance)
     unavailable = dict(unavailable or {})
+    knobs = dict(knobs or {})
     names = list(dict.fromkeys(list(engines) if engines is not None else list(table["engine"])))
     for n in unavailable:
         if n not in names:
             names.append(n)
-    meets, cannot, missing = [], [], []
+    ce = "worst_error_choice" if "worst_error_choice" in table else "worst_error"
+    meets, others, missing = [], [], []
+    order = {"fails held-out": 0, "unconfirmed": 1, "lucky steps only": 2, "cannot reach": 3}
     for n in names:
         g = table[table["engine"] == n]
         if n in unavailable or g.empty:
             missing.append({"engine": n, "meets": False, "status": "unavailable",
                             "setting": None, "dt": None, "worst_error": None,
+                            "worst_error_choice": None, "worst_error_heldout": None,
                             "cpu_per_sim_s": None, "real_time_factor": None,
-                            "reason": unavailable.get(n, "not measured")})
+                            "reason": unavailable.get(n, "not measured"), "erratic": False,
+                            "convergence": ""})
             continue
-        err = g["worst_error"].astype(float)
-        ok = g[err <= tolerance]
-        if len(ok):
-            best = ok.sort_values(["cpu_per_sim_s", "dt"], ascending=[True, False]).iloc[0]
-            meets.append({"engine": n, "meets": True, "status": "meets",
-                          "setting": str(best["setting"]), "dt": float(best["dt"]),
-                          "worst_error": float(best["worst_error"]),
-                          "cpu_per_sim_s": float(best["cpu_per_sim_s"]),
-                          "real_time_factor": float(best["real_time_factor"]), "reason": ""})
+        knob = knobs.get(n, "dt")
+        kcol = knob if knob in g else "dt"
+        best_meet, best_other = None, None
+        for var, gv in g.groupby(g["setting"].map(lambda s: _variant(s, knob)), sort=False):
+            gv = gv.sort_values(kcol, ascending=False)
+            errs = [(float(r[kcol]), _num(r[ce])) for _, r in gv.iterrows()]
+            errs = [(s, e if not math.isnan(e) else math.inf) for s, e in errs]
+            conv = convergence(errs, tolerance)
+            base = {"engine": n, "variant": var, "erratic": conv["erratic"],
+                    "convergence": conv["note"], "curve": conv["curve"]}
+            if conv["index"] is not None:
+                r = gv.iloc[conv["index"]]
+                held = _num(r.get("worst_error_heldout", math.nan)) \
+                    if "worst_error_heldout" in gv else _num(r[ce])
+                row = {**base, **_row(r, ce), "worst_error_heldout": held}
+                if math.isnan(held):
+                    row.update(meets=False, status="unconfirmed",
+                               reason="accepted on the choice part; the held-out part was "
+                                      "not run")
+                elif held <= tolerance:
+                    row.update(meets=True, status="meets", reason="")
+                else:
+                    row.update(meets=False, status="fails held-out",
+                               reason=f"chosen {r['setting']} (choice worst "
+                                      f"{_fmt_err(row['worst_error_choice'])}) but held-out "
+                                      f"worst {_fmt_err(held)} > tolerance "
+                                      f"{100 * tolerance:g} %")
+            else:
+                fin = gv.assign(_e=[e for _, e in errs]).sort_values(["_e", "cpu_per_sim_s"])
+                r = fin.iloc[0]
+                row = {**base, **_row(r, ce),
+                       "worst_error_heldout": _num(r.get("worst_error_heldout", math.nan)),
+                       "meets": False, "status": conv["status"]}
+                tried = ", ".join(str(s) for s in gv["setting"])
+                row["reason"] = (f"{conv['status']}: best choice error "
+                                 f"{_fmt_err(row['worst_error_choice'])} at {r['setting']}, "
+                                 f"tolerance {100 * tolerance:g} % (tried: {tried})"
+                                 + (f"; {conv['note']}" if conv["note"] else ""))
+            if row["meets"]:
+                if best_meet is None or (row["cpu_per_sim_s"], -row["dt"]) < (
+                        best_meet["cpu_per_sim_s"], -best_meet["dt"]):
+                    best_meet = row
+            elif best_other is None or (order.get(row["status"], 9),
+                                        row["worst_error_choice"]) < (
+                    order.get(best_other["status"], 9), best_other["worst_error_choice"]):
+                best_other = row
+        if best_meet is not None:
+            meets.append(best_meet)
         else:
-            best = g.assign(_e=err).sort_values(["_e", "cpu_per_sim_s"]).iloc[0]
-            tried = ", ".join(f"{s}" for s in g["setting"])
-            cannot.append({"engine": n, "meets": False, "status": "cannot reach",
-                           "setting": str(best["setting"]), "dt": float(best["dt"]),
-                           "worst_error": float(best["worst_error"]),
-                           "cpu_per_sim_s": float(best["cpu_per_sim_s"]),
-                           "real_time_factor": float(best["real_time_factor"]),
-                           "reason": f"best worst error {_fmt_err(float(best['worst_error']))} "
-                                     f"at {best['setting']} > tolerance "
-                                     f"{100 * tolerance:g} % (tried: {tried})"})
+            others.append(best_other)
     meets.sort(key=lambda r: (r["cpu_per_sim_s"], -r["dt"]))
     for r in meets:   # CPU time moves by a few percent between measurements: call it a tie
         r["tie_with_cheapest"] = r["cpu_per_sim_s"] <= TIE * meets[0]["cpu_per_sim_s"]
-    cannot.sort(key=lambda r: (r["worst_error"], r["cpu_per_sim_s"]))
-    return meets + cannot + missing
+    others.sort(key=lambda r: (order.get(r["status"], 9), r["worst_error_choice"],
+                               r["cpu_per_sim_s"]))
+    return meets + others + missing
+
+
+def _row(r: pd.Series, ce: str) -> dict[str, Any]:
+    return {"setting": str(r["setting"]), "dt": float(r["dt"]),
+            "worst_error": _num(r.get("worst_error", r[ce])),
+            "worst_error_choice": _num(r[ce]),
+            "cpu_per_sim_s": _num(r["cpu_per_sim_s"]),
+            "real_time_factor": _num(r["real_time_factor"]),
+            "build_cpu_s": _num(r.get("build_cpu_s", math.nan)),
+            "warmup_cpu_s": _num(r.get("warmup_cpu_s", math.nan)),
+            "near_disagree": int(_num(r.get("near_disagree", 0)) or 0)}
 
 
 def _check_tolerance(tolerance: Any) -> float:
@@ -189,11 +304,187 @@ def _check_tolerance(tolerance: Any) -> float:
     return t
 
 
+# =========================================================================================
+# The answer
+# =========================================================================================
+@dataclass
+class Advice:
+    """The answer of :func:`advise` (JSON: :meth:`to_json`).
+
+    scene, tolerance [-] (relative: 0.02 = 2 %);
+    ranking : one dict per engine considered: those that meet the tolerance first (cheapest
+        first), then the others (fails held-out, unconfirmed, lucky steps only, cannot reach),
+        then the unavailable: ``engine``, ``meets``, ``status``, ``setting`` (label),
+        ``settings`` (the mapping ``rockbench run --setting`` and ``rb.run(**settings)`` take),
+        ``dt`` [s], ``worst_error_choice`` / ``worst_error_heldout`` [-], ``held_out`` (the
+        held-out statistics of :func:`held_out_stats`), ``cpu_per_sim_s`` [s/s, steady state],
+        ``build_cpu_s`` / ``warmup_cpu_s`` [s, one-off], ``real_time_factor`` [-], ``erratic``,
+        ``convergence`` (words), ``reason``, ``tie_with_cheapest``;
+    considered : every engine name considered, in the order given;
+    evidence : the tradeoff rows behind the answer (every setting run);
+    contact : the contact parameters measured (``contact=True``): one row per engine and
+        variant with its error on the impact probes and the change against the defaults;
+    size : "quick", "default" or "full"; cases : the evidence (with its part);
+    machine : where the cost was measured.
+    """
+
+    scene: str
+    tolerance: float
+    ranking: list[dict[str, Any]]
+    considered: list[str]
+    evidence: pd.DataFrame
+    size: str = "default"
+    cases: list[dict[str, Any]] = field(default_factory=list)
+    machine: dict[str, Any] = field(default_factory=dict)
+    contact: pd.DataFrame = field(default_factory=pd.DataFrame)
+
+    @property
+    def quick(self) -> bool:
+        return self.size == "quick"
+
+    @property
+    def recommended(self) -> dict[str, Any] | None:
+        """The cheapest engine and setting within the tolerance on both parts (None if none)."""
+        return self.ranking[0] if self.ranking and self.ranking[0]["meets"] else None
+
+    def to_json(self) -> dict[str, Any]:
+        from .result import _jsonable
+
+        ev = self.evidence[[c for c in _EVIDENCE if c in self.evidence.columns]]
+
+        def clean(rows):
+            return [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                     for k, v in r.items()} for r in rows]
+
+        rec = self.recommended
+        return _jsonable({
+            "scene": self.scene, "tolerance": self.tolerance, "size": self.size,
+            "quick": self.quick,
+            "recommended": None if rec is None else clean([rec])[0],
+            "settings": None if rec is None else rec["settings"],
+            "setting_args": None if rec is None else setting_args(rec["engine"],
+                                                                  rec["settings"]),
+            "ranking": clean(self.ranking), "considered": self.considered,
+            "error_definition": "worst over a part of the evidence of |peak error| (surviving "
+                                "pulses away from the boundary, records) and eta error (free "
+                                "rocking); inf if a run is not ok, its overturning verdict is "
+                                "wrong away from the boundary or a record's peak is outside "
+                                "the analytic sensitivity band; near-boundary cells: verdicts "
+                                "reported, not counted",
+            "cost_definition": "steady-state process CPU s per simulated s, median of repeats "
+                               "(the model build per run and the warm-up per process "
+                               "measured apart: build_cpu_s, warmup_cpu_s)",
+            "evidence": clean(ev.to_dict("records")),
+            "contact": clean(self.contact.to_dict("records")) if len(self.contact) else [],
+            "cases": self.cases, "machine": self.machine})
+
+    def text(self) -> str:
+        """A short human answer: the recommendation, then every engine's line."""
+        n_c = sum(1 for c in self.cases if c.get("part") == "choice")
+        n_h = len(self.cases) - n_c
+        lines = [f"Scene {self.scene}, tolerance {100 * self.tolerance:g} % ({self.size} "
+                 f"evidence: chosen on {n_c} cases, confirmed on {n_h} held-out cases):"]
+        rec = self.recommended
+        if rec:
+            lines.append(f"  use {rec['engine']} with {_settings_text(rec['engine'], rec['settings'])}: "
+                         f"worst error {_pct(rec['worst_error_choice'])} chosen, "
+                         f"{_pct(rec['worst_error_heldout'])} held-out; "
+                         f"{rec['cpu_per_sim_s']:.3g} CPU s per simulated s (steady state, "
+                         f"real-time factor {rec['real_time_factor']:.3g})")
+            ties = [r["engine"] for r in self.ranking[1:] if r.get("tie_with_cheapest")]
+            if ties:
+                lines.append(f"  (as cheap within {100 * (TIE - 1):.0f} %, a tie on this "
+                             f"machine: {', '.join(ties)})")
+        else:
+            lines.append("  no engine meets this tolerance on both parts of the evidence")
+        if self.quick:
+            lines.append("  quick evidence: trust it as far as its held-out figure; "
+                         "the default or --full evidence is larger")
+        for i, r in enumerate(self.ranking, 1):
+            if r["status"] == "unavailable":
+                lines.append(f"  {i}. {r['engine']}: unavailable: {r['reason']}")
+                continue
+            head = (f"  {i}. {r['engine']}: {r['status']}: {r['setting']}, chosen "
+                    f"{_pct(r['worst_error_choice'])}, held-out "
+                    f"{_pct(r.get('worst_error_heldout', math.nan))}")
+            if r["status"] == "meets":
+                head += (f", {r['cpu_per_sim_s']:.3g} CPU s/s (+ build "
+                         f"{_num(r.get('build_cpu_s')):.2g} s per run, warm-up "
+                         f"{_num(r.get('warmup_cpu_s')):.2g} s once)")
+            else:
+                head += f": {r['reason']}"
+            lines.append(head)
+            extra = []
+            if r.get("erratic"):
+                extra.append("ERRATIC error against the step: " + r.get("curve", ""))
+            elif r.get("convergence") and r["status"] == "meets":
+                extra.append("converged: " + r["convergence"])
+            ho = r.get("held_out") or {}
+            if ho.get("n"):
+                extra.append(f"held-out: {100 * ho['beyond']:.0f} % of {ho['n']} cases beyond "
+                             f"the tolerance, {ho['beyond2']} beyond twice it, "
+                             f"{ho['wrong_verdicts']} wrong verdicts or failed runs away from "
+                             f"the boundary, {ho['outside_band']} records outside the band")
+            nd = r.get("near_disagree") or 0
+            if nd:
+                extra.append(f"{nd} near-boundary cell(s) with the other verdict (not counted)")
+            if r.get("variant"):
+                extra.append(f"contact settings: {r['variant']}")
+            lines += [f"       {e}" for e in extra]
+        if len(self.contact):
+            lines.append("  contact settings measured (impact probes: free-rocking eta and the "
+                         "smallest-uplift record, choice part):")
+            for _, c in self.contact.iterrows():
+                lines.append(f"    {c['engine']} {c['variant'] or 'defaults'}: probe error "
+                             f"{_pct(c['probe_error'])} (eta {_pct(c['eta_error'])}, record "
+                             f"{_pct(c['record_error'])}), change {c['change']:+.3g} x")
+        return "\n".join(lines)
+
+
+def setting_args(engine: str, settings: dict[str, Any]) -> list[str]:
+    """The ``--setting`` values (``ENGINE.KEY=VALUE``, the CLI's one grammar) of a settings
+    mapping: ``rockbench run --engine E --setting A --setting B ...``."""
+    return [f"{engine}.{k}={v}" for k, v in settings.items()]
+
+
+def _settings_text(engine: str, settings: dict[str, Any]) -> str:
+    return " ".join(f"--setting {a}" for a in setting_args(engine, settings))
+
+
+# =========================================================================================
+# Running it
+# =========================================================================================
+def _settings_of(engine: str, label: str, knob: str) -> dict[str, Any]:
+    """The mapping ``rb.run(**settings)`` takes for a setting label (output_dt raised to dt
+    where dt exceeds the default output interval)."""
+    from .tradeoff import Setting, _parse_value, _run_overrides
+
+    over = {}
+    for part in str(label).split(","):
+        k, v = part.split("=", 1)
+        over[k] = _parse_value(v)
+    s = Setting(engine, tuple(sorted(over.items())))
+    out = _run_overrides(s)
+    order = [knob] + sorted(k for k in out if k != knob)
+    return {k: out[k] for k in order if k in out}
+
+
+def _probe_error(runs: pd.DataFrame, probes: set[str]) -> tuple[float, float, float]:
+    r = runs[runs["case"].isin(probes)]
+    eta = r.loc[r["kind"] == "free", "error"].to_numpy(dtype=float)
+    rec = r.loc[r["kind"] != "free", "error"].to_numpy(dtype=float)
+    e1 = float(np.nanmax(eta)) if eta.size else math.nan
+    e2 = float(np.nanmax(rec)) if rec.size else math.nan
+    return max(e1, e2), e1, e2
+
+
 def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=None, *,
-           dts: Iterable[float] | None = None, quick: bool = False, repeat: int | None = None,
+           dts: Iterable[float] | None = None, quick: bool = False, full: bool = False,
+           contact: bool | None = None, repeat: int | None = None, seed: int | None = None,
            executor: str = "process", workers: int | None = None,
            progress: bool = False) -> Advice:
-    """The cheapest setting of every engine within ``tolerance`` on ``scene``.
+    """The cheapest setting of every engine within ``tolerance`` on ``scene``, chosen on the
+    choice part of its evidence and confirmed on the held-out part (module docstring).
 
     Parameters
     ----------
@@ -202,30 +493,49 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
     engines : backend names (default: every registered engine but the analytic model; those
         that cannot run here are listed as unavailable).
     store : directory of the store to reuse and fill (None: nothing kept).
-    dts : time steps [s] tried, from the largest down (default :data:`ADVISE_DTS`, quick:
-        :data:`QUICK_DTS`).
-    quick : the reduced validation set (:func:`rockbench.tradeoff.validation_set`) and one
-        repeat: for tests and a first look.
+    dts : the ladder of time steps [s] (default: :data:`ADVISE_DTS`, or the engine's own
+        ``precision_ladder``).
+    quick : the quick evidence (a subset of the default; one repeat);
+    full : the full evidence and the contact-parameter search.
+    contact : search the contact parameters (default: ``full``).
     repeat : runs of each case for the cost (default 3; quick: 1).
+    seed : the split's seed (default :data:`rockbench.validation.SEED`).
     """
     from .engines import REGISTRY, get_backend
     from .runner import REFERENCE, resolve_engines
     from .scene.scene import Scene, load_scene
-    from .tradeoff import machine_info, tradeoff, validation_set
+    from .tradeoff import machine_info, summarize, tradeoff, validation_set
+    from .validation import SEED
 
     tolerance = _check_tolerance(tolerance)
+    if quick and full:
+        raise ParameterError("quick", quick, "not together with full")
+    size = "quick" if quick else "full" if full else "default"
+    contact = full if contact is None else bool(contact)
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     names = ([n for n in REGISTRY if n != REFERENCE] if engines is None
              else [n for n in resolve_engines(engines) if n != REFERENCE])
     if not names:
         raise ParameterError("engines", engines, "at least one engine besides the analytic model")
-    dts = sorted({float(d) for d in (dts if dts is not None else
-                                     (QUICK_DTS if quick else ADVISE_DTS))}, reverse=True)
     repeat = (1 if quick else 3) if repeat is None else repeat
+    vset = validation_set(scene, size=size, seed=SEED if seed is None else seed)
+    choice = [c for c in vset if c.part == "choice"]
+    held = [c for c in vset if c.part == "held-out"]
+    free = sorted([c for c in choice if c.kind == "free"], key=lambda c: -abs(c.phi0))
+    recs = sorted([c for c in choice if c.kind == "record"],
+                  key=lambda c: abs(dict(c.motion)["scale"]))
+    probes = free[:2] + recs[:1]
     unavailable: dict[str, str] = {}
-    tables = []
-    vset = validation_set(scene, quick=quick)
+    knobs: dict[str, str] = {}
+    run_frames: list[pd.DataFrame] = []
+    contact_rows: list[dict[str, Any]] = []
+    kw = dict(repeat=repeat, self_consistency="none", executor=executor, workers=workers,
+              store=store, progress=progress)
+
+    def measure(eng: str, over: dict[str, Any], cases) -> pd.DataFrame:
+        return tradeoff(scene, [eng], exact=[over], cases=cases, **kw).runs
+
     for n in names:
         try:
             ok, why = get_backend(n).available()
@@ -234,31 +544,99 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
         if not ok:
             unavailable[n] = why
             continue
-        for d in dts:
-            t = tradeoff(scene, [n], dts=[d], repeat=repeat, cases=vset,
-                         self_consistency="none", executor=executor, workers=workers,
-                         store=store, progress=progress)
-            tables.append(t.table)
-            if float(t.table["worst_error"].iloc[0]) <= tolerance:
-                break
-    evidence = (pd.concat(tables, ignore_index=True) if tables
-                else pd.DataFrame(columns=_EVIDENCE))
-    ranking = decide(evidence, tolerance, engines=names, unavailable=unavailable)
+        knob, ladder = precision_knob(n)
+        knobs[n] = knob
+        if dts is not None and knob == "dt":
+            ladder = tuple(sorted({float(d) for d in dts}, reverse=True))
+        variants: list[dict[str, Any]] = [{}]
+        if contact and n in CONTACT_VARIANTS and probes:
+            default_val = getattr(get_backend(n).Settings(), knob, ladder[len(ladder) // 2])
+            base = measure(n, {knob: default_val}, probes)
+            b_err, b_eta, b_rec = _probe_error(base, {c.name for c in probes})
+            contact_rows.append({"engine": n, "variant": "", knob: default_val,
+                                 "probe_error": b_err, "eta_error": b_eta,
+                                 "record_error": b_rec, "change": 1.0})
+            helpful = []
+            for v in CONTACT_VARIANTS[n]:
+                try:
+                    get_backend(n).Settings(**{knob: default_val, **v})
+                except Exception as e:   # a variant this version's Settings refuses
+                    contact_rows.append({"engine": n, "variant": str(v), knob: default_val,
+                                         "probe_error": math.nan, "eta_error": math.nan,
+                                         "record_error": math.nan, "change": math.nan,
+                                         "reason": str(e)})
+                    continue
+                r = measure(n, {knob: default_val, **v}, probes)
+                e, e1, e2 = _probe_error(r, {c.name for c in probes})
+                lab = ",".join(f"{k}={v[k]}" for k in sorted(v))
+                contact_rows.append({"engine": n, "variant": lab, knob: default_val,
+                                     "probe_error": e, "eta_error": e1, "record_error": e2,
+                                     "change": e / b_err if b_err > 0 else math.nan})
+                if e < 0.9 * b_err:
+                    helpful.append((e, v))
+            helpful.sort(key=lambda x: x[0])
+            if helpful:
+                variants.append(dict(helpful[0][1]))
+                combo: dict[str, Any] = {}
+                for _, v in helpful:
+                    if not set(v) & set(combo):
+                        combo.update(v)
+                if len(combo) > len(helpful[0][1]):
+                    try:
+                        get_backend(n).Settings(**{knob: default_val, **combo})
+                        variants.append(combo)
+                    except Exception:
+                        pass
+        for v in variants:
+            frames = []
+            errs: list[tuple[float, float]] = []
+            accepted = None
+            steps = list(ladder)
+            i = 0
+            while i < len(steps):
+                d = steps[i]
+                r = measure(n, {knob: d, **v}, choice)
+                frames.append(r)
+                tab = summarize(r)
+                errs.append((d, float(tab["worst_error_choice"].iloc[0])))
+                conv = convergence(errs, tolerance)
+                if conv["index"] is not None:
+                    accepted = conv["step"]
+                    break
+                if i == len(steps) - 1 and errs[-1][1] <= tolerance and d / 2 >= 1e-6 \
+                        and knob == "dt":
+                    steps.append(d / 2)       # confirm the finest step with a finer one
+                i += 1
+            if accepted is not None:
+                frames.append(measure(n, {knob: accepted, **v}, held))
+            run_frames += frames
+    runs = pd.concat(run_frames, ignore_index=True) if run_frames else pd.DataFrame()
+    evidence = summarize(runs) if len(runs) else pd.DataFrame(columns=_EVIDENCE)
+    ranking = decide(evidence, tolerance, engines=names, unavailable=unavailable, knobs=knobs)
+    for r in ranking:
+        if r.get("setting") and r["status"] != "unavailable":
+            r["settings"] = _settings_of(r["engine"], r["setting"], knobs.get(r["engine"], "dt"))
+            sel = runs[(runs["engine"] == r["engine"]) & (runs["setting"] == r["setting"])]
+            r["held_out"] = held_out_stats(sel, tolerance)
+        else:
+            r["settings"], r["held_out"] = None, {}
     return Advice(scene=scene.name, tolerance=tolerance, ranking=ranking, considered=names,
-                  evidence=evidence, quick=quick, cases=[c.to_dict() for c in vset],
-                  machine=machine_info())
+                  evidence=evidence, size=size, cases=[c.to_dict() for c in vset],
+                  machine=machine_info(), contact=pd.DataFrame(contact_rows))
 
 
 def advice_for_report(table: pd.DataFrame, tolerances: Sequence[float] = (0.02, 0.002)
                       ) -> pd.DataFrame:
     """For the report: one row per (tolerance, engine) of :func:`decide` on a tradeoff table
-    (columns tolerance [-], rank, engine, status, setting, dt [s], worst_error [-],
-    cpu_per_sim_s [s/s], real_time_factor [-], reason): the recommendation is rank 1 of each
+    (columns tolerance [-], rank, engine, status, setting, dt [s], worst_error_choice and
+    worst_error_heldout [-], worst_error [-] (over both parts), cpu_per_sim_s [s/s, steady
+    state], real_time_factor [-], erratic, reason): the recommendation is rank 1 of each
     tolerance when its status is "meets"."""
     rows = []
     for tol in tolerances:
         for i, r in enumerate(decide(table, tol), 1):
-            rows.append({"tolerance": float(tol), "rank": i, **{k: r[k] for k in (
-                "engine", "status", "setting", "dt", "worst_error", "cpu_per_sim_s",
-                "real_time_factor", "reason")}})
+            rows.append({"tolerance": float(tol), "rank": i, **{k: r.get(k) for k in (
+                "engine", "status", "setting", "dt", "worst_error_choice",
+                "worst_error_heldout", "worst_error", "cpu_per_sim_s", "real_time_factor",
+                "erratic", "reason")}})
     return pd.DataFrame(rows)

@@ -88,7 +88,9 @@ class Setting:
         from .engines import get_backend
 
         d = dict(self.overrides)
-        return float(d["dt"]) if "dt" in d else float(get_backend(self.engine).Settings().dt)
+        if "dt" in d:
+            return float(d["dt"])
+        return float(getattr(get_backend(self.engine).Settings(), "dt", math.nan))
 
     @property
     def label(self) -> str:
@@ -170,14 +172,64 @@ def settings_grid(engines: Sequence[str], dts: Iterable[float] | None = None,
 def _reference(key: str, case: ValidationCase):
     scene = _scene_from_key(key)
     sc, motion = case.load(scene)
-    return _analytic(sc, motion, case.duration, case.phi0)
+    # records: the compiled analytic path (the default of record comparisons; same answers)
+    return _analytic(sc, motion, case.duration, case.phi0, compiled=case.kind == "record"
+                     or (case.motion is not None and dict(case.motion).get("kind") == "record"))
 
 
-def _warm(engine: str) -> None:
-    """Import the engine before timing (an import is not the run's cost)."""
+@functools.lru_cache(maxsize=64)
+def _band(key: str, case: ValidationCase):
+    """The analytic model's own sensitivity band of a record case (:mod:`rockbench.sensitivity`)."""
+    from .sensitivity import band
+
+    sc, motion = case.load(_scene_from_key(key))
+    return band(sc, motion, duration=case.duration, phi0=case.phi0)
+
+
+#: (engine, setting label) already warmed up in this process, with the warm-up's CPU time [s].
+_WARMED: dict[tuple[str, str], float] = {}
+
+#: Simulated time [s] of the warm-up run (free rocking from 0.3 alpha).
+WARMUP_DURATION = 0.5
+
+
+def _warm(setting: "Setting", scene, over: dict[str, Any]) -> float:
+    """Run one short case of ``setting`` on ``scene`` before anything is timed, once per process
+    (the one-off costs: imports, numba's compile of the stepping loop, the engine's first-run
+    allocations). Returns its CPU time [s] the first time, NaN after."""
+    from .runner import run
+
+    k = (setting.engine, setting.label)
+    if k in _WARMED:
+        return math.nan
+    c0 = cpu_clock()
+    try:
+        run(scene, None, engine=setting.engine, duration=WARMUP_DURATION,
+            phi0=0.3 * scene.alpha, **over)
+    except Exception:   # the timed run reports the failure
+        pass
+    _WARMED[k] = cpu_clock() - c0
+    return _WARMED[k]
+
+
+def _build_cpu(setting: "Setting", scene, phi0: float, over: dict[str, Any]) -> float:
+    """CPU time [s] of building the engine's model of ``scene`` (a one-off cost per run,
+    measured apart: :meth:`EngineBackend.build` then release), or 0 for a backend without one."""
     from .engines import get_backend
 
-    get_backend(engine).available()
+    cls = get_backend(setting.engine)
+    if not hasattr(cls, "build"):
+        return 0.0
+    b = cls(scene, None, **over)
+    c0 = cpu_clock()
+    try:
+        b.build(phi0)
+    finally:
+        try:
+            b._close()
+        except Exception:
+            pass
+    return cpu_clock() - c0
 
 
 def _run_overrides(setting: Setting) -> dict[str, Any]:
@@ -195,7 +247,9 @@ def _run_overrides(setting: Setting) -> dict[str, Any]:
 
 def _run_item(item: dict[str, Any]) -> dict[str, Any]:
     """Run one (engine, setting, case) ``repeat`` times; return its row (metrics against the
-    analytic reference, CPU times) and the thinned history (t, phi) for self-consistency.
+    analytic reference; for a record, its place in the reference's sensitivity band; CPU times:
+    the steady-state part of every repeat, the model build and the process's one-off warm-up
+    apart) and the thinned history (t, phi) for self-consistency.
     Never raises for a failure of the run: it becomes status "error"."""
     from .compare import metrics
     from .runner import run
@@ -203,27 +257,34 @@ def _run_item(item: dict[str, Any]) -> dict[str, Any]:
     case: ValidationCase = item["case"]
     setting: Setting = item["setting"]
     row: dict[str, Any] = {"engine": setting.engine, "setting": setting.label,
-                           "dt": setting.dt, "case": case.name, "kind": case.kind}
+                           "dt": setting.dt, "case": case.name, "kind": case.kind,
+                           "part": case.part, "group": case.group,
+                           "near_boundary": bool(case.near_boundary)}
     try:
         scene = _scene_from_key(item["scene"])
         sc, motion = case.load(scene)
         ref = _reference(item["scene"], case)
-        _warm(setting.engine)
+        over = _run_overrides(setting)
+        row["warmup_cpu_s"] = _warm(setting, sc, over)
+        build = _build_cpu(setting, sc, case.phi0, over)
         cpu: list[float] = []
         result = None
-        over = _run_overrides(setting)
         for _ in range(int(item["repeat"])):
             c0 = cpu_clock()
             result = run(sc, motion, engine=setting.engine, duration=case.duration,
                          phi0=case.phi0, **over)
-            cpu.append(cpu_clock() - c0)
+            cpu.append(max(cpu_clock() - c0 - build, 0.0))
         m = metrics(result, ref)
         row.update({k: m[k] for k in ("status", "reason", "peak_rel_error", "nrmse",
                                       "eta_max_rel_error", "verdict_agrees", "overturned",
                                       "overturned_ref", "energy_gained_at_impact",
                                       "max_sliding", "max_penetration", "contact_opened")})
+        if case.kind == "record" and row["status"] == "ok":
+            j = _band(item["scene"], case).judge(result)
+            row["in_band"], row["band_distance"] = bool(j.inside), float(j.relative)
         row["sim_time"] = float(result.cost.sim_time)
         row["cpu_s"] = [float(c) for c in cpu]
+        row["build_cpu_s"] = float(build)
         row["t"] = result.history["t"].to_numpy(dtype=float)
         row["phi"] = result.history["phi"].to_numpy(dtype=float)
         row["alpha"] = float(sc.alpha)
@@ -236,8 +297,9 @@ def _run_item(item: dict[str, Any]) -> dict[str, Any]:
 def _crashed(item: dict[str, Any], reason: str) -> dict[str, Any]:
     s, c = item["setting"], item["case"]
     return {"engine": s.engine, "setting": s.label, "dt": s.dt, "case": c.name,
-            "kind": c.kind, "status": "error", "reason": reason, "cpu_s": [],
-            "sim_time": math.nan}
+            "kind": c.kind, "part": c.part, "group": c.group,
+            "near_boundary": bool(c.near_boundary), "status": "error", "reason": reason,
+            "cpu_s": [], "sim_time": math.nan}
 
 
 # =========================================================================================
@@ -245,15 +307,27 @@ def _crashed(item: dict[str, Any], reason: str) -> dict[str, Any]:
 # =========================================================================================
 def case_error(row: Mapping[str, Any]) -> float:
     """The validation error [-] of one run row (see the module docstring): |peak error| of a
-    surviving pulse, the largest eta error of a free-rocking run, 0 for an overturning pulse;
-    infinite when the run is not ok or gets the overturning verdict wrong."""
+    surviving pulse or a record, the largest eta error of a free-rocking run, 0 for an
+    overturning case; infinite when the run is not ok, gets the overturning verdict wrong away
+    from the boundary, or (a record) puts its peak outside the analytic model's own sensitivity
+    band; NaN (not counted, reported) for a cell near the boundary: its verdict is a coin toss
+    for every model there, and its peak a steep function of A."""
     if row.get("status") != "ok":
         return math.inf
+    near = bool(row.get("near_boundary") or False)
     va = row.get("verdict_agrees")
-    if va is not None and va is not pd.NA and not bool(va):
-        return math.inf
+    if va is not None and va is not pd.NA and not (isinstance(va, float) and math.isnan(va)) \
+            and not bool(va):
+        return math.nan if near else math.inf
+    if near:
+        return math.nan
     kind = row.get("kind")
-    if kind == "survive":
+    if kind == "record":
+        ib = row.get("in_band")
+        if ib is not None and not (isinstance(ib, float) and math.isnan(ib)) and not bool(ib):
+            return math.inf
+        v = abs(float(row.get("peak_rel_error", math.nan)))
+    elif kind == "survive":
         v = abs(float(row.get("peak_rel_error", math.nan)))
     elif kind == "free":
         v = abs(float(row.get("eta_max_rel_error", math.nan)))
@@ -286,14 +360,20 @@ RUN_COLUMNS: dict[str, str] = {
     "setting": "-, setting label (dt first, then other overrides)",
     "dt": "s, engine time step",
     "case": "-, validation case (free rocking +-phi0/alpha, or the pulse's label)",
-    "kind": "-, free | survive | overturn",
+    "kind": "-, free | survive | overturn | record",
+    "part": "-, choice | held-out (the case's part of the evidence)",
+    "group": "-, the case's group: free | away:<pulse> | near | overturn | record",
+    "near_boundary": "-, a pulse cell within NEAR_MARGIN of the analytic overturning threshold",
     "status": "-, ok | diverged | invalid | error (error: an exception, see reason)",
     "reason": "-, why a run is not ok",
     "peak_rel_error": "-, max|phi| / max|phi_ref| - 1 against the analytic reference",
     "nrmse": "-, RMS of (phi - phi_ref) / alpha over the common time grid",
     "eta_max_rel_error": "-, largest |eta / eta_ref - 1| over the run's impacts",
     "verdict_agrees": "-, same overturning verdict as the analytic reference",
-    "error": "-, the case's validation error (case_error): inf when not ok or wrong verdict",
+    "in_band": "-, a record's peak within the analytic model's sensitivity band",
+    "band_distance": "-, a record's peak / nearest band edge - 1 (0 inside)",
+    "error": "-, the case's validation error (case_error): inf when not ok, a wrong verdict "
+             "away from the boundary or a record outside its band; NaN near the boundary",
     "verdict": "-, class of the error (VERDICTS)",
     "self_peak_error": "-, max|phi| / max|phi_fine| - 1 against the same engine at dt / 4 "
                        "(NaN when that run is not in the sweep)",
@@ -304,6 +384,9 @@ RUN_COLUMNS: dict[str, str] = {
     "cpu_s_median": "s, median over the repeats of the run's process CPU time",
     "cpu_s_min": "s, smallest CPU time of the repeats",
     "cpu_s_max": "s, largest CPU time of the repeats",
+    "build_cpu_s": "s, CPU time of building the engine's model once (apart from cpu_s)",
+    "warmup_cpu_s": "s, CPU time of the process's one-off warm-up run for this setting (NaN: "
+                    "the process had warmed up already)",
 }
 
 #: Columns of :attr:`Tradeoff.table` (one row per engine and setting).
@@ -313,24 +396,35 @@ TABLE_COLUMNS: dict[str, str] = {
     "dt": "s, engine time step",
     "n_cases": "-, validation runs",
     "n_ok": "-, runs with status ok",
-    "peak_error_worst": "-, largest |peak_rel_error| over the surviving pulses",
-    "peak_error_median": "-, median |peak_rel_error| over the surviving pulses",
+    "peak_error_worst": "-, largest |peak_rel_error| over the surviving pulses away from the "
+                        "boundary and the records",
+    "peak_error_median": "-, median of the same",
     "nrmse_worst": "-, largest nrmse over the free-rocking and surviving runs",
     "nrmse_median": "-, median nrmse over the free-rocking and surviving runs",
     "eta_error_worst": "-, largest eta error over the free-rocking runs",
     "eta_error_median": "-, median of the free-rocking runs' largest eta errors",
     "verdicts_agree": "-, fraction of ok runs with the analytic overturning verdict",
-    "worst_error": "-, the worst validation error (inf: a run not ok or a wrong verdict)",
+    "worst_error": "-, the worst validation error over every case (inf: a run not ok, a wrong "
+                   "verdict away from the boundary, a record outside its band)",
+    "worst_error_choice": "-, the same over the choice part of the evidence",
+    "worst_error_heldout": "-, the same over the held-out part",
+    "n_choice": "-, runs of the choice part", "n_heldout": "-, runs of the held-out part",
+    "near_disagree": "-, near-boundary cells whose overturning verdict differs (not counted)",
+    "outside_band": "-, record runs whose peak is outside the analytic sensitivity band",
     "verdict": "-, class of worst_error (VERDICTS)",
     "self_peak_error_worst": "-, largest |self_peak_error| (against dt / 4; NaN: not run)",
     "self_nrmse_worst": "-, largest self_nrmse (against dt / 4)",
     "max_sliding": "m, largest slip over the ok runs",
     "any_contact_opened": "-, a contact the analytic model keeps closed opened in some run",
-    "cpu_per_sim_s": "s/s, process CPU s per simulated s over the whole set (median of repeats)",
+    "cpu_per_sim_s": "s/s, steady-state process CPU s per simulated s over the whole set "
+                     "(median of repeats; the model build and the warm-up apart)",
     "cpu_per_sim_s_min": "s/s, the same for the fastest repeat",
     "cpu_per_sim_s_max": "s/s, the same for the slowest repeat",
     "real_time_factor": "-, simulated s per CPU s (1 / cpu_per_sim_s)",
     "repeats": "-, runs of every case (cost spread over them)",
+    "build_cpu_s": "s, median CPU time of building the engine's model for one run (one-off)",
+    "warmup_cpu_s": "s, largest one-off warm-up CPU time of a worker process (first run: "
+                    "imports, JIT compile)",
 }
 
 
@@ -362,7 +456,8 @@ def _runs_frame(runs: list[dict[str, Any]]) -> pd.DataFrame:
         cpu = np.asarray(r.get("cpu_s") or [], dtype=float)
         row = {c: r.get(c, math.nan) for c in RUN_COLUMNS}
         row["error"] = case_error(r)
-        row["verdict"] = classify_error(row["error"], r.get("status", "error"))
+        row["verdict"] = ("near boundary" if math.isnan(row["error"]) else
+                          classify_error(row["error"], r.get("status", "error")))
         row["cpu_s_median"] = float(np.median(cpu)) if cpu.size else math.nan
         row["cpu_s_min"] = float(cpu.min()) if cpu.size else math.nan
         row["cpu_s_max"] = float(cpu.max()) if cpu.size else math.nan
@@ -381,7 +476,8 @@ def summarize(runs: pd.DataFrame) -> pd.DataFrame:
     out = []
     for (eng, label), g in runs.groupby(["engine", "setting"], sort=False):
         ok = g[g["status"] == "ok"]
-        surv = ok[ok["kind"] == "survive"]
+        far = ~ok["near_boundary"].fillna(False).astype(bool)
+        surv = ok[ok["kind"].isin(["survive", "record"]) & far]
         free = ok[ok["kind"] == "free"]
         fr = ok[ok["kind"].isin(["free", "survive"])]
 
@@ -390,8 +486,16 @@ def summarize(runs: pd.DataFrame) -> pd.DataFrame:
             v = v[np.isfinite(v)]
             return float(f(v)) if v.size else math.nan
 
-        errs = g["error"].to_numpy(dtype=float)
-        worst = float(errs.max()) if errs.size else math.inf
+        def worst_of(rows: pd.DataFrame) -> float:
+            e = rows["error"].to_numpy(dtype=float)
+            e = e[~np.isnan(e)]
+            return float(e.max()) if e.size else (math.inf if len(rows) and not
+                                                   rows["near_boundary"].astype(bool).all()
+                                                   else math.nan)
+
+        worst = worst_of(g) if len(g) else math.inf
+        part = g["part"] if "part" in g else pd.Series(["choice"] * len(g), index=g.index)
+        choice, held = g[part != "held-out"], g[part == "held-out"]
         status = "ok" if (g["status"] == "ok").all() else (
             "diverged" if (g["status"] == "diverged").any() else
             "invalid" if (g["status"] == "invalid").any() else "error")
@@ -417,6 +521,13 @@ def summarize(runs: pd.DataFrame) -> pd.DataFrame:
             "eta_error_median": stat(free["eta_max_rel_error"], np.median),
             "verdicts_agree": float(va.mean()) if len(va) else math.nan,
             "worst_error": worst,
+            "worst_error_choice": worst_of(choice) if len(choice) else math.nan,
+            "worst_error_heldout": worst_of(held) if len(held) else math.nan,
+            "n_choice": int(len(choice)), "n_heldout": int(len(held)),
+            "near_disagree": int((ok["near_boundary"].astype(bool)
+                                  & ~ok["verdict_agrees"].fillna(True).astype(bool)).sum()),
+            "outside_band": int((ok["kind"].eq("record")
+                                 & ok["in_band"].eq(False)).sum()),
             "verdict": classify_error(worst, status if status != "error" else "invalid"),
             "self_peak_error_worst": stat(ok.loc[ok["kind"] == "survive", "self_peak_error"],
                                           np.max),
@@ -427,6 +538,8 @@ def summarize(runs: pd.DataFrame) -> pd.DataFrame:
             "cpu_per_sim_s_min": float(np.min(per_rep)) if per_rep else math.nan,
             "cpu_per_sim_s_max": float(np.max(per_rep)) if per_rep else math.nan,
             "repeats": len(per_rep),
+            "build_cpu_s": stat(g["build_cpu_s"], np.median),
+            "warmup_cpu_s": stat(g["warmup_cpu_s"], np.max),
         }
         c = row["cpu_per_sim_s"]
         row["real_time_factor"] = 1.0 / c if c and math.isfinite(c) and c > 0 else math.nan
@@ -497,7 +610,7 @@ def _item_key(item: dict[str, Any]) -> str:
     from .sweep.store import code_fingerprint, key
 
     s, c = item["setting"], item["case"]
-    return key({"scene": item["scene"], "case": c.to_dict(), "engine": s.engine,
+    return key({"scene": item["scene"], "case": c.physics(), "engine": s.engine,
                 "settings": dict(s.overrides), "repeat": int(item["repeat"]),
                 "code": code_fingerprint()})
 
@@ -521,8 +634,8 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
              settings: Sequence[Mapping[str, Any] | str] | None = None, repeat: int = 3,
              quick: bool = False, self_consistency: str = "grid",
              executor: str = "process", workers: int | None = None, store=None,
-             progress: bool = False, cases: Sequence[ValidationCase] | None = None
-             ) -> Tradeoff:
+             progress: bool = False, cases: Sequence[ValidationCase] | None = None,
+             exact: Sequence[Mapping[str, Any]] | None = None) -> Tradeoff:
     """Measure work-precision on ``scene`` (a Scene, a built-in name or a scene file).
 
     Parameters
@@ -541,6 +654,8 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
     store : a directory: runs already there (same scene data, case, engine, settings, repeat
         count and code fingerprint) are not run again; new ones are written there.
     cases : a validation set to use instead of :func:`validation_set`.
+    exact : override sets run as they are, instead of the grid of ``dts`` x ``settings``
+        (each for every engine; without dt an engine runs at its default step).
     """
     from .runner import REFERENCE, resolve_engines
     from .scene.scene import Scene, load_scene
@@ -563,7 +678,10 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
             usable.append(n)
         else:
             unavailable[n] = why
-    grid = settings_grid(usable, dts, settings)
+    if exact is not None:
+        grid = [Setting(e, tuple(sorted(dict(o).items()))) for e in usable for o in exact]
+    else:
+        grid = settings_grid(usable, dts, settings)
     shown = set(grid)
     if self_consistency == "run":
         for s in list(grid):
@@ -603,6 +721,8 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
     runs = []
     for k, it in keyed:
         r = dict(done[k])
+        c = it["case"]        # its place in this split (the store keys the physics only)
+        r.update(part=c.part, group=c.group, near_boundary=bool(c.near_boundary))
         r["_setting"] = it["setting"]
         r["_shown"] = it["setting"] in shown
         runs.append(r)
