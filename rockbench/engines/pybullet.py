@@ -81,6 +81,12 @@ class PybulletSettings(EngineSettings):
     solver : constraint solver, "si" (Bullet's sequential impulse, its default). The only
         choice: Bullet's MLCP solvers were measured and rejected (LCP_PGS: NaN on the first
         step; LCP_DANTZIG: bit-identical results on these scenes, and it prints to stdout).
+    split_impulse : Bullet's split impulse (penetration recovery kept out of the velocities),
+        True, False or None (default: not set, Bullet's own choice).
+    contact_slop : penetration [m] Bullet leaves uncorrected, >= 0 and < 0.01, or None
+        (default: not set, Bullet's own).
+    restitution : coefficient of restitution of every body [-], in [0, 1] (default 0: the
+        analytic impact is plastic; a searchable contact parameter of ``rockbench advise``).
     virtual_mass_ratio : mass of each of the two virtual links of the planar joint chain as a
         fraction of the body's mass, in (0, 1e-3].
     damper : how the shared machinery applies the dampers' force (one of
@@ -102,6 +108,9 @@ class PybulletSettings(EngineSettings):
     virtual_mass_ratio: float = 1e-6
     damper: str = "distributed"
     friction: float = 2.0
+    split_impulse: bool | None = None
+    contact_slop: float | None = None
+    restitution: float = 0.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -129,6 +138,15 @@ class PybulletSettings(EngineSettings):
             raise ParameterError("virtual_mass_ratio", vm, "in (0, 1e-3]")
         if self.damper not in DAMPER_MODELS:
             raise ParameterError("damper", self.damper, f"one of {', '.join(DAMPER_MODELS)}")
+        if self.split_impulse is not None and not isinstance(self.split_impulse,
+                                                             (bool, np.bool_)):
+            raise ParameterError("split_impulse", self.split_impulse, "True, False or None")
+        cs = self.contact_slop
+        if cs is not None and not (isinstance(cs, (int, float)) and 0.0 <= cs < 0.01):
+            raise ParameterError("contact_slop", cs, "None or in [0, 0.01) m")
+        r = self.restitution
+        if not (isinstance(r, (int, float)) and 0.0 <= r <= 1.0):
+            raise ParameterError("restitution", r, "in [0, 1]")
         if self.friction > _BULLET_MAX_FRICTION:
             raise ParameterError("friction", self.friction,
                                  f"<= {_BULLET_MAX_FRICTION:g} (Bullet clamps the pair's product)")
@@ -178,6 +196,13 @@ class PybulletBackend(EngineBackend):
             deterministicOverlappingPairs=1,
             restitutionVelocityThreshold=0.0,
             physicsClientId=cid)
+        extra = {}
+        if cfg.split_impulse is not None:
+            extra["useSplitImpulse"] = int(bool(cfg.split_impulse))
+        if cfg.contact_slop is not None:
+            extra["contactSlop"] = float(cfg.contact_slop)
+        if extra:
+            pb.setPhysicsEngineParameter(physicsClientId=cid, **extra)
         pb.setGravity(0.0, 0.0, -G, physicsClientId=cid)
         mu = math.sqrt(float(cfg.friction))   # Bullet multiplies the two coefficients
         self._mu = mu
@@ -197,7 +222,7 @@ class PybulletBackend(EngineBackend):
             bid = pb.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
                                      basePosition=[xc, 0.0, top - thick],
                                      physicsClientId=cid)
-            pb.changeDynamics(bid, -1, lateralFriction=mu, restitution=0.0,
+            pb.changeDynamics(bid, -1, lateralFriction=mu, restitution=float(cfg.restitution),
                               spinningFriction=0.0, rollingFriction=0.0,
                               frictionAnchor=bool(cfg.friction_anchor),
                               contactProcessingThreshold=float(cfg.contact_breaking_threshold),
@@ -254,7 +279,8 @@ class PybulletBackend(EngineBackend):
                           physicsClientId=cid)
         for link in range(3):
             pb.changeDynamics(bid, link, jointDamping=0.0, lateralFriction=self._mu,
-                              restitution=0.0, spinningFriction=0.0, rollingFriction=0.0,
+                              restitution=float(self.settings.restitution),
+                              spinningFriction=0.0, rollingFriction=0.0,
                               frictionAnchor=bool(cfg.friction_anchor),
                               contactProcessingThreshold=float(cfg.contact_breaking_threshold),
                               physicsClientId=cid)
