@@ -30,7 +30,8 @@ __version__ = "0.1.0"
 #: Public name -> the module (relative to this package) that defines it, imported on first use.
 _LAZY: dict[str, str] = {
     **dict.fromkeys(("Block", "Frame", "Devices", "Scene", "GroundMotion", "RickerPulse",
-                     "Record", "load_scene", "load_record", "builtin_scenes", "make_pulse"),
+                     "Record", "load_scene", "save_scene", "load_record", "builtin_scenes",
+                     "make_pulse"),
                     ".scene"),
     "Result": ".result",
     **dict.fromkeys(("run", "info"), ".runner"),
@@ -40,7 +41,7 @@ _LAZY: dict[str, str] = {
 }
 
 __all__ = ["Block", "Frame", "Devices", "Scene", "GroundMotion", "RickerPulse", "Record",
-           "Result", "load_scene", "load_record", "builtin_scenes", "make_pulse", "run", "info",
+           "Result", "load_scene", "save_scene", "load_record", "builtin_scenes", "make_pulse", "run", "info",
            "get_backend", "backend_names", "available_backends", "engine_info",
            "RockbenchError", "ParameterError", "SceneError", "RecordError", "plot_history",
            "plot_map", "plot_work_precision", "__version__"]
@@ -66,4 +67,4 @@ if TYPE_CHECKING:  # what static tools see (the same names, imported eagerly)
     from .result import Result
     from .runner import info, run
     from .scene import (Block, Devices, Frame, GroundMotion, Record, RickerPulse, Scene,
-                        builtin_scenes, load_record, load_scene, make_pulse)
+                        builtin_scenes, load_record, load_scene, make_pulse, save_scene)
