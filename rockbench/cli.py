@@ -43,7 +43,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .cli_input import backend_overrides, compare_settings, load_scene_from, motion_from
+from .cli_input import (backend_overrides, engine_names, engine_settings, load_scene_from,
+                        motion_from)
 from .constants import G
 from .errors import ParameterError, RockbenchError
 
@@ -145,7 +146,10 @@ def _add_motion_options(p: argparse.ArgumentParser) -> None:
                    help="Ricker pulse shape (paper Eq. 29 / Eq. 30)")
     x.add_argument("--record", metavar="FILE",
                    help="accelerogram: a PEER .AT2 file or a headerless column file")
-    x.add_argument("--phi0", type=_nonzero, metavar="X",
+    x.add_argument("--phi0", type=_nonzero, metavar="RAD",
+                   help="free rocking from phi0 = RAD radians (!= 0, + counterclockwise), "
+                        "as rockbench.run(phi0=...)")
+    x.add_argument("--phi0-alpha", type=_nonzero, metavar="X",
                    help="free rocking from phi0 = X alpha (X != 0, + counterclockwise)")
     g.add_argument("--sign", type=_sign, default=None, metavar="{1,-1}",
                    help="pulse sign (default 1: the pulse as printed in the paper)")
@@ -155,8 +159,9 @@ def _add_motion_options(p: argparse.ArgumentParser) -> None:
                    help="pulse frequency W = omega_g / p > 0")
     g.add_argument("--record-dt", type=_positive, metavar="S",
                    help="time step [s] of a headerless record file")
-    g.add_argument("--record-units", choices=("g", "m/s2", "cm/s2"),
-                   help="units of a headerless record file")
+    g.add_argument("--record-units", metavar="UNITS",
+                   help="units of a headerless record file: g, m/s2, cm/s2 (a records.csv "
+                        "beside the file gives them, and its dt, when it lists the file)")
     g.add_argument("--scale", type=_nonzero, metavar="F",
                    help="multiply the record by F (default 1)")
 
@@ -166,9 +171,29 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
                    help="simulated time [s] from the motion's start (default: motion + 10 s)")
     p.add_argument("--dt", type=_positive, metavar="S",
                    help="engine time step [s] (engines only: the analytic model has none)")
-    p.add_argument("--setting", dest="settings", metavar="NAME=VALUE", type=_key_value,
-                   action="append", default=[],
-                   help="set a field of the backend's Settings (e.g. iterations=20)")
+    add_setting_option(p)
+
+
+def add_setting_option(p: argparse.ArgumentParser, what: str = "set") -> None:
+    """``--setting ENGINE.KEY=VALUE`` (repeatable): the one settings grammar of every command
+    (:func:`rockbench.cli_input.parse_settings`)."""
+    p.add_argument("--setting", dest="settings", metavar="ENGINE.KEY=VALUE", action="append",
+                   default=[], help=f"{what} a field of an engine's Settings, e.g. "
+                   "pymunk.iterations=20 (bare KEY=VALUE when one engine is selected); "
+                   "repeatable")
+
+
+def add_engine_option(p: argparse.ArgumentParser, default: str) -> None:
+    """``--engine NAME`` (repeatable; a comma-separated list works too; ``--engines`` is the
+    same option): the engines of a command that runs several."""
+    p.add_argument("--engine", "--engines", dest="engine", metavar="NAME", action="append",
+                   help=f"an engine (rockbench engines); repeat for several, e.g. --engine "
+                        f"pymunk --engine mujoco (default: {default})")
+
+
+def add_quiet_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress on stderr (errors still print)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -189,13 +214,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("run", help="simulate a scene with one backend")
     _add_scene_options(p)
-    p.add_argument("--engine", default="analytic", metavar="NAME",
+    p.add_argument("--engine", default=None, metavar="NAME", action="append",
                    help="backend (rockbench engines; default analytic)")
     _add_motion_options(p)
     _add_run_options(p)
-    p.add_argument("--out", metavar="FILE.csv",
-                   help="write the history CSV (and the events to <stem>_events.csv)")
+    p.add_argument("--out", metavar="DIR",
+                   help="write DIR/history.csv and DIR/events.csv")
+    p.add_argument("--csv", metavar="FILE.csv",
+                   help="write the history to FILE.csv (and the events to <stem>_events.csv)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_quiet_option(p)
 
     p = sub.add_parser("engines", help="registered backends and installed engine versions")
     p.add_argument("--json", action="store_true", help="print JSON")
@@ -203,19 +231,18 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="run several backends and compare them with the "
                        "analytic reference")
     _add_scene_options(p)
-    p.add_argument("--engines", type=_names, metavar="A,B,...",
-                   help="backends to compare (default: every available one)")
+    add_engine_option(p, "every available one")
     _add_motion_options(p)
     _add_run_options(p)
     p.add_argument("--report", metavar="DIR", help="write an HTML report of the case to DIR")
-    p.add_argument("--csv", metavar="FILE", help="write the metrics table as CSV")
+    p.add_argument("--csv", metavar="FILE.csv", help="write the metrics table as CSV")
     p.add_argument("--json", action="store_true", help="print the tables as JSON")
+    add_quiet_option(p)
 
     p = sub.add_parser("report", help="run the default campaign and write the HTML report")
     p.add_argument("--out", default="reports", metavar="DIR", help="output folder (reports)")
     p.add_argument("--records", metavar="DIR", help="records folder (default: bundled ones)")
-    p.add_argument("--engines", type=_names, metavar="A,B,...",
-                   help="backends (default: every available one)")
+    add_engine_option(p, "every available one")
     p.add_argument("--quick", action="store_true", help="a small campaign (minutes)")
     p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
     p.add_argument("--dask", metavar="ADDRESS",
@@ -226,6 +253,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the long campaign: measure the 12x12x4 engine maps (OUT/engine-maps) "
                         "that are missing or no longer reproduce, and the full stability sweep "
                         "(reuses the store)")
+    add_quiet_option(p)
     from .cli_choosing import add_choosing_commands
 
     add_choosing_commands(sub)
@@ -385,25 +413,57 @@ def _write_atomic(files: dict[Path, Any], option: str) -> None:
                 pass
 
 
-def cmd_run(args: argparse.Namespace) -> int:
-    from . import runner
+def _run_engine(args: argparse.Namespace) -> str:
+    """The one engine of ``rockbench run`` (default analytic)."""
+    names = engine_names(args) or ["analytic"]
+    if len(names) > 1:
+        raise ParameterError("--engine", ",".join(names),
+                             "one engine (rockbench compare runs several)")
+    return names[0]
 
-    scene = load_scene_from(args)
-    overrides = backend_overrides(args.engine, args)
-    motion, phi0 = motion_from(args, scene)
-    if args.out:
-        _output_folder(Path(args.out), "--out")  # before the run: fail fast
-    result = runner.run(scene, motion, engine=args.engine, duration=args.duration, phi0=phi0,
-                        **overrides)
-    files = {}
+
+def _history_files(args: argparse.Namespace) -> list[tuple[str, Path, Path]]:
+    """[(option, history path, events path)] of ``run --out DIR`` (DIR/history.csv,
+    DIR/events.csv) and ``run --csv FILE.csv`` (FILE.csv, FILE_events.csv), their folders
+    created and checked before the run."""
+    files = []
     if args.out:
         out = Path(args.out)
-        _write_atomic({out: result.history, _events_path(out): result.events}, "--out")
-        files = {"history_csv": str(out), "events_csv": str(_events_path(out))}
+        if out.exists() and not out.is_dir():
+            raise RockbenchError(f"cannot write --out {out}: it is a file (--out is a folder; "
+                                 "--csv FILE.csv names a file)")
+        files.append(("--out", out / "history.csv", out / "events.csv"))
+    if args.csv:
+        csv = Path(args.csv)
+        if csv.is_dir() or csv.name in ("", ".", ".."):
+            raise RockbenchError(f"cannot write --csv {csv}: it is a folder (--out DIR writes "
+                                 "DIR/history.csv)")
+        files.append(("--csv", csv, _events_path(csv)))
+    for option, history, _ in files:
+        _output_folder(history, option)               # before the run: fail fast
+    return files
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from . import runner
+    from .progress import simulated_time
+
+    scene = load_scene_from(args)
+    engine = _run_engine(args)
+    overrides = backend_overrides(engine, args)
+    motion, phi0 = motion_from(args, scene)
+    targets = _history_files(args)
+    with simulated_time(f"{scene.name}: {engine}", show=not args.quiet):
+        result = runner.run(scene, motion, engine=engine, duration=args.duration, phi0=phi0,
+                            **overrides)
+    files = {}
+    for option, history, events in targets:
+        _write_atomic({history: result.history, events: result.events}, option)
+        files = {"history_csv": str(history), "events_csv": str(events)}
 
     if args.json:
         data = result.to_json()
-        data["engine"] = args.engine
+        data["engine"] = engine
         data["phi0"] = phi0
         data["real_time_factor"] = result.cost.real_time_factor
         data.update(files)
@@ -411,7 +471,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         return 0
 
     s, c, alpha = result.summary, result.cost, scene.alpha
-    print(f"{scene.name}, engine {args.engine}: {_describemotion_from(motion, phi0, alpha)}")
+    print(f"{scene.name}, engine {engine}: {_describemotion_from(motion, phi0, alpha)}")
     if s.status != "ok":
         print(f"status             {s.status}: {s.reason}")
     rows = [
@@ -477,20 +537,20 @@ def _package_version(dist: str) -> str | None:
 
 def cmd_compare(args: argparse.Namespace) -> int:
     from . import compare as compare_mod
-    from .runner import resolve_engines
+    from .runner import REFERENCE, resolve_engines
 
     scene = load_scene_from(args)
-    if args.engines is not None:
-        resolve_engines(args.engines, name="--engines")  # unknown names fail here, by name
+    engines = engine_names(args)
     motion, phi0 = motion_from(args, scene)
-    settings = compare_settings(args.engines, args)
+    chosen = [e for e in (engines or resolve_engines(None)) if e != REFERENCE] or [REFERENCE]
+    settings = engine_settings(args.settings, chosen, dt=args.dt, also=(REFERENCE,))
     if args.csv:
         _output_folder(Path(args.csv), "--csv")
     if args.report:
         _output_folder(Path(args.report) / "index.html", "--report")
-    comparison = compare_mod.compare(scene, motion, engines=args.engines, phi0=phi0,
-                         duration=args.duration, settings=settings,
-                         progress=sys.stderr.isatty() and not args.json)
+    comparison = compare_mod.compare(scene, motion, engines=engines, phi0=phi0,
+                                     duration=args.duration, settings=settings or None,
+                                     progress=not args.quiet)
     table = comparison.table
     report_path = csv_path = None
     if args.csv:
@@ -559,14 +619,12 @@ def _print_constants(out: str | Path) -> None:
 
 def cmd_report(args: argparse.Namespace) -> int:
     from . import campaign
-    from .runner import resolve_engines
 
     if args.records is not None and not Path(args.records).is_dir():
         raise ParameterError("--records", args.records, "an existing folder of record files")
-    if args.engines is not None:
-        resolve_engines(args.engines, name="--engines")
-    kwargs: dict[str, Any] = {"full": args.full,
-                              "engines": args.engines, "records_dir": args.records,
+    engines = engine_names(args)
+    kwargs: dict[str, Any] = {"full": args.full, "progress": not args.quiet,
+                              "engines": engines, "records_dir": args.records,
                               "quick": args.quick, "store": args.store}
     if args.dask is not None:
         kwargs.update(executor="dask", dask_address=args.dask)
@@ -614,6 +672,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except SystemExit as e:  # --help, --version
         return e.code if isinstance(e.code, int) else 0
+    from .progress import configure
+
+    configure(quiet=bool(getattr(args, "quiet", False)))
     try:
         return COMMANDS[args.command](args)
     except RockbenchError as e:

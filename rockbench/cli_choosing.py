@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
-from .cli_input import load_scene_from
+from .errors import ParameterError
+
+from .cli_input import engine_names, engine_settings, load_scene_from
 
 __all__ = ["add_choosing_commands", "cmd_tradeoff", "cmd_advise", "cmd_stress"]
 
@@ -30,18 +31,20 @@ def _dts(text: str) -> list[float]:
 
 def add_choosing_commands(sub) -> None:
     """tradeoff, advise and stress (issue 13; docs/choosing.md)."""
-    from .cli import _add_scene_options, _count, _names, _positive
+    from .cli import (_add_scene_options, _count, _names, _positive, add_engine_option,
+                      add_quiet_option)
 
     p = sub.add_parser("tradeoff", help="work-precision of every engine and setting on a scene "
                        "(error against the analytic model vs CPU cost)")
     _add_scene_options(p)
-    p.add_argument("--engines", type=_names, metavar="A,B,...",
-                   help="engines (default: every available one)")
+    add_engine_option(p, "every available one")
     p.add_argument("--dt", type=_dts, metavar="S,S,...",
                    help="time steps [s] (default 4e-3,2e-3,1e-3,5e-4,2.5e-4,1e-4)")
-    p.add_argument("--setting", dest="extra", metavar="[ENGINE:]NAME=VALUE,...",
+    p.add_argument("--setting", dest="settings", metavar="ENGINE.KEY=VALUE[,...]",
                    action="append", default=[],
-                   help="an extra setting swept at every dt (e.g. pymunk:iterations=60)")
+                   help="an extra setting swept at every dt, e.g. pymunk.iterations=60 (one "
+                        "engine's fields, comma-separated, make one setting; bare KEY=VALUE "
+                        "when one engine is selected); repeatable")
     p.add_argument("--repeat", type=_count, default=3, metavar="N",
                    help="runs of each case; cost = median CPU time (default 3)")
     p.add_argument("--quick", action="store_true", help="the reduced validation set")
@@ -50,28 +53,51 @@ def add_choosing_commands(sub) -> None:
     p.add_argument("--out", metavar="DIR",
                    help="write tradeoff.csv, tradeoff_runs.csv and work_precision.png")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_quiet_option(p)
 
     p = sub.add_parser("advise", help="the cheapest setting of each engine within a tolerance")
     _add_scene_options(p)
     p.add_argument("--tolerance", type=_positive, required=True, metavar="X",
                    help="relative bound on the worst validation error (0.02 = 2 %%)")
-    p.add_argument("--engines", type=_names, metavar="A,B,...",
-                   help="engines considered (default: every registered engine)")
+    add_engine_option(p, "every registered engine")
     p.add_argument("--quick", action="store_true",
                    help="reduced validation set, one repeat, dt 4e-3..1e-3 (a first look)")
     p.add_argument("--store", metavar="PATH", help="result store folder (reused on a rerun)")
     p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
     p.add_argument("--json", action="store_true", help="print the advice as JSON")
+    add_quiet_option(p)
 
     p = sub.add_parser("stress", help="every engine at the extremes, one axis at a time")
-    p.add_argument("--engines", type=_names, metavar="A,B,...",
-                   help="engines (default: every available one)")
+    add_engine_option(p, "every available one")
     p.add_argument("--full", action="store_true", help="the whole ranges (slow)")
     p.add_argument("--axes", type=_names, metavar="A,B,...", help="only these axes")
     p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
     p.add_argument("--out", metavar="DIR",
                    help="write stress.csv and one stability map per engine (PNG)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_quiet_option(p)
+
+
+def _swept_settings(texts: list[str], engines: list[str]) -> list[dict[str, Any]]:
+    """tradeoff's ``--setting`` values, each one extra setting swept at every dt: one engine's
+    ``ENGINE.KEY=VALUE`` fields, comma-separated, in the one grammar; validated here (a bad
+    key or value exits 2 before anything runs) -> dicts with the engine under ``__engine__``
+    (:func:`rockbench.tradeoff.settings_grid`)."""
+    out = []
+    for text in texts:
+        parts = [t.strip() for t in text.split(",") if t.strip()]
+        head = parts[0].split("=", 1)[0] if parts else ""
+        if "." in head:        # later bare fields belong to the first one's engine
+            eng = head.split(".", 1)[0]
+            parts = [parts[0], *(p if "." in p.split("=", 1)[0] else f"{eng}.{p}"
+                                 for p in parts[1:])]
+        over = engine_settings(parts, engines, option="--setting")
+        if len(over) != 1:
+            raise ParameterError("--setting", text, "fields of one engine (ENGINE.KEY=VALUE,"
+                                 "ENGINE.KEY=VALUE); repeat --setting for another engine")
+        (engine, fields), = over.items()
+        out.append({"__engine__": engine, **fields})
+    return out
 
 
 def _executor(args: argparse.Namespace) -> dict[str, Any]:
@@ -92,13 +118,14 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
     from .tradeoff import tradeoff
 
     scene = load_scene_from(args)
-    if args.engines is not None:
-        resolve_engines(args.engines, name="--engines")
+    engines = engine_names(args)
+    extra = _swept_settings(args.settings, [e for e in engines or resolve_engines(None)
+                                            if e != "analytic"])
     if args.out:
         _output_folder(Path(args.out) / "tradeoff.csv", "--out")
-    t = tradeoff(scene, args.engines, dts=args.dt, settings=args.extra, repeat=args.repeat,
-                 quick=args.quick, store=args.store,
-                 progress=sys.stderr.isatty() and not args.json, **_executor(args))
+    t = tradeoff(scene, engines, dts=args.dt, settings=extra, repeat=args.repeat,
+                 quick=args.quick, store=args.store, progress=not args.quiet,
+                 **_executor(args))
     if args.out:
         out = Path(args.out)
         _write_atomic({out / "tradeoff.csv": t.table,
@@ -123,15 +150,12 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
 
 
 def cmd_advise(args: argparse.Namespace) -> int:
-    from .cli import _print_json
     from .advise import advise
-    from .runner import resolve_engines
+    from .cli import _print_json
 
     scene = load_scene_from(args)
-    if args.engines is not None:
-        resolve_engines(args.engines, name="--engines")
-    a = advise(scene, args.tolerance, args.engines, args.store, quick=args.quick,
-               progress=sys.stderr.isatty() and not args.json, **_executor(args))
+    a = advise(scene, args.tolerance, engine_names(args), args.store, quick=args.quick,
+               progress=not args.quiet, **_executor(args))
     if args.json:
         _print_json(a.to_json())
     else:
@@ -142,15 +166,13 @@ def cmd_advise(args: argparse.Namespace) -> int:
 def cmd_stress(args: argparse.Namespace) -> int:
     from .cli import _output_folder, _pandas_display, _print_json, _write_atomic
     from .report.tradeoff_figures import plot_stability_map
-    from .runner import resolve_engines
     from .stress import breaking_points, stress
 
-    if args.engines is not None:
-        resolve_engines(args.engines, name="--engines")
+    engines = engine_names(args)
     if args.out:
         _output_folder(Path(args.out) / "stress.csv", "--out")
-    s = stress(args.engines, full=args.full, axes=args.axes,
-               progress=sys.stderr.isatty() and not args.json, **_executor(args))
+    s = stress(engines, full=args.full, axes=args.axes, progress=not args.quiet,
+               **_executor(args))
     if args.out:
         _write_atomic({Path(args.out) / "stress.csv": s.table}, "--out")
         for eng in dict.fromkeys(s.table["engine"]):

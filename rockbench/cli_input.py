@@ -13,7 +13,8 @@ from typing import Any
 from .errors import ParameterError, RecordError, RockbenchError
 
 __all__ = ["MissingOption", "scene_overrides", "load_scene_from", "setting_value",
-           "backend_overrides", "motion_from", "compare_settings"]
+           "parse_settings", "engine_settings", "backend_overrides", "motion_from",
+           "engine_names"]
 
 
 class MissingOption(ParameterError):
@@ -45,12 +46,13 @@ def load_scene_from(args: argparse.Namespace):
     return load_scene(args.scene, scene_overrides(args.overrides))
 
 
-def setting_value(cls: type, name: str, raw: str) -> Any:
-    """Parse ``raw`` as the type of the Settings field ``name`` (from its default value)."""
+def setting_value(cls: type, name: str, raw: str, shown: str | None = None) -> Any:
+    """Parse ``raw`` as the type of the Settings field ``name`` (from its default value);
+    errors name ``shown`` (default ``--setting NAME``)."""
+    shown = shown or f"--setting {name}"
     fields = {f.name: f for f in dataclasses.fields(cls)}
     if name not in fields:
-        raise ParameterError(f"--setting {name}", raw,
-                             f"a field of {cls.__qualname__}: {', '.join(fields)}")
+        raise ParameterError(shown, raw, f"a field of {cls.__qualname__}: {', '.join(fields)}")
     f = fields[name]
     default = f.default if f.default is not dataclasses.MISSING else None
     low = raw.lower()
@@ -75,37 +77,94 @@ def setting_value(cls: type, name: str, raw: str) -> Any:
             return raw
     except ValueError:
         kind = type(default).__name__
-        raise ParameterError(f"--setting {name}", raw, f"a value of type {kind}") from None
+        raise ParameterError(shown, raw, f"a value of type {kind}") from None
 
 
-def backend_overrides(engine: str, args: argparse.Namespace) -> dict[str, Any]:
-    """Settings overrides for ``engine`` from --dt and --setting (validated by its Settings)."""
+def _settings_class(engine: str):
     from .engines import get_backend
 
-    cls = get_backend(engine).Settings
-    names = {f.name for f in dataclasses.fields(cls)}
-    out: dict[str, Any] = {}
-    for name, raw in args.settings:
-        out[name] = setting_value(cls, name, raw)
-    if args.dt is not None:
-        if "dt" not in names:
-            raise ParameterError("--dt", args.dt, f"omitted for the {engine} backend",
-                                 f"{engine} has no time step; its settings are "
-                                 f"{', '.join(sorted(names))}")
-        if "dt" in out:
-            raise ParameterError("--dt", args.dt, "omitted when --setting dt=... is given")
-        out["dt"] = args.dt
-    if "dt" in out and "output_dt" in names and "output_dt" not in out:
-        # keep the default output grid unless the step is coarser than it
-        default_out = next(f.default for f in dataclasses.fields(cls) if f.name == "output_dt")
-        if isinstance(out["dt"], (int, float)) and out["dt"] > default_out:
-            out["output_dt"] = out["dt"]
-    cls(**out)  # validate now: errors name the field
+    return get_backend(engine).Settings
+
+
+def parse_settings(texts: list[str], engines: list[str], *, option: str = "--setting",
+                   also: tuple[str, ...] = ()) -> list[tuple[str, str, str]]:
+    """The one ``--setting`` grammar: each text is ``ENGINE.KEY=VALUE`` (or a bare
+    ``KEY=VALUE`` when exactly one engine is selected: ``engines`` has one name) ->
+    ``[(engine, key, raw value), ...]``. ``ENGINE`` must be one of ``engines`` or ``also`` (e.g.
+    the analytic reference of ``compare``), ``KEY`` a field of its Settings; errors are
+    :class:`ParameterError` lines showing the right form."""
+    from .engines import REGISTRY
+
+    selectable = list(dict.fromkeys([*engines, *also]))
+    out = []
+    for text in texts:
+        key, sep, raw = text.partition("=")
+        key, raw = key.strip(), raw.strip()
+        if not sep or not key:
+            raise ParameterError(option, text, "ENGINE.KEY=VALUE (e.g. pymunk.iterations=20)")
+        head, dot, field = key.partition(".")
+        if dot and head in REGISTRY:
+            engine = head
+            if engine not in selectable:
+                raise ParameterError(option, text, f"a setting of a selected engine: "
+                                     f"{', '.join(selectable)}")
+        elif dot:
+            raise ParameterError(option, text, f"ENGINE.KEY=VALUE with ENGINE one of "
+                                 f"{', '.join(REGISTRY)}")
+        elif len(engines) == 1:
+            engine, field = engines[0], key
+        else:
+            example = f"{engines[0]}.{key}={raw}" if engines else f"ENGINE.{key}={raw}"
+            raise ParameterError(option, text, f"ENGINE.KEY=VALUE naming one of the selected "
+                                 f"engines ({', '.join(selectable) or 'none'}), e.g. {option} "
+                                 f"{example}")
+        out.append((engine, field, raw))
     return out
 
 
+def engine_settings(texts: list[str], engines: list[str], *, dt: float | None = None,
+                    also: tuple[str, ...] = (), option: str = "--setting"
+                    ) -> dict[str, dict[str, Any]]:
+    """Validated Settings overrides {engine: {field: value}} from ``--setting`` texts (the
+    grammar of :func:`parse_settings`) and ``--dt`` (every selected engine with a time step;
+    an error if none has one). Each engine's Settings is built once here, so a bad key or value
+    is refused before anything runs."""
+    selectable = list(dict.fromkeys([*engines, *also]))
+    out: dict[str, dict[str, Any]] = {}
+    for engine, field, raw in parse_settings(texts, engines, option=option, also=also):
+        cls = _settings_class(engine)
+        over = out.setdefault(engine, {})
+        if field in over:
+            raise ParameterError(f"{option} {engine}.{field}", raw, "given once")
+        over[field] = setting_value(cls, field, raw, f"{option} {engine}.{field}")
+    if dt is not None:
+        with_dt = [e for e in engines
+                   if "dt" in {f.name for f in dataclasses.fields(_settings_class(e))}]
+        if not with_dt:
+            names = ", ".join(selectable)
+            raise ParameterError("--dt", dt, "omitted: the analytic model has no time step"
+                                 if names == "analytic" else
+                                 f"omitted: none of {names} has a time step")
+        for e in with_dt:
+            if "dt" in out.get(e, {}):
+                raise ParameterError("--dt", dt, f"omitted when --setting {e}.dt is given")
+            out.setdefault(e, {})["dt"] = dt
+    for engine, over in out.items():
+        _settings_class(engine)(**over)  # validate now: the error names the field
+    return out
+
+
+def backend_overrides(engine: str, args: argparse.Namespace) -> dict[str, Any]:
+    """Settings overrides of the one backend ``engine`` from ``args.settings`` (--setting)
+    and ``args.dt`` (--dt), validated (:func:`engine_settings`)."""
+    return engine_settings(list(args.settings), [engine], dt=args.dt).get(engine, {})
+
+
 def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
-    """(ground motion or None, phi0 [rad]) from the motion options."""
+    """(ground motion or None, phi0 [rad]) from the motion options: ``--pulse``, ``--record``
+    (a headerless file takes --record-dt and --record-units, or its line of the ``records.csv``
+    beside it, as :func:`rockbench.load_record` does), ``--phi0`` [rad] or ``--phi0-alpha``
+    [multiples of alpha]."""
     pulse_opts = {"--sign": args.sign, "--amplitude": args.amplitude,
                   "--frequency": args.frequency}
     record_opts = {"--record-dt": args.record_dt, "--record-units": args.record_units,
@@ -136,75 +195,54 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
         path = Path(args.record)
         if not path.is_file():
             raise RecordError(f"--record: file {str(path)!r} does not exist")
-        if path.suffix.lower() != ".at2":
+        listed = None
+        if path.suffix.lower() != ".at2" and (args.record_dt is None or args.record_units is None):
+            from .scene.records import listed_metadata
+
+            listed = listed_metadata(path)      # dt and units from the records.csv beside it
+        if path.suffix.lower() != ".at2" and listed is None:
             if args.record_dt is None:
                 raise MissingOption("--record-dt", "the time step [s] > 0",
                                     f"for the headerless record file {path.name}")
             if args.record_units is None:
-                raise MissingOption("--record-units", "one of g, m/s2, cm/s2",
-                                    f"for the headerless record file {path.name}")
+                raise MissingOption("--record-units", "an acceleration unit (g, m/s2, cm/s2)",
+                                    f"for the headerless record file {path.name} (or list it "
+                                    "in a records.csv beside it)")
         return load_record(path, dt=args.record_dt, units=args.record_units,
                            scale=1.0 if args.scale is None else args.scale), 0.0
 
-    if args.phi0 is not None:
+    phi0, option = args.phi0, "--phi0"
+    if args.phi0_alpha is not None:
+        phi0, option = args.phi0_alpha * scene.alpha, "--phi0-alpha"
+    if phi0 is not None:
         # the fall angle of the direction phi0 points to (they differ for an asymmetric frame)
-        sign = 1 if args.phi0 > 0 else -1
+        sign = 1 if phi0 > 0 else -1
         fall = scene.fall_angles[sign]
-        limit = fall / scene.alpha
-        if abs(args.phi0) >= limit:
+        if abs(phi0) >= fall:
             way = "counterclockwise" if sign == 1 else "clockwise"
-            raise ParameterError("--phi0", args.phi0,
-                                 f"0 < |phi0| < {limit:.4g} for {way} rocking (multiples of "
-                                 f"alpha; {way} fall angle {fall:.4g} rad)")
-        return None, args.phi0 * scene.alpha
+            given = args.phi0 if option == "--phi0" else args.phi0_alpha
+            rng = (f"0 < |phi0| < {fall:.4g} rad" if option == "--phi0" else
+                   f"0 < |phi0| < {fall / scene.alpha:.4g} (multiples of alpha = "
+                   f"{scene.alpha:.4g} rad)")
+            raise ParameterError(option, given, f"{rng} for {way} rocking (the {way} fall "
+                                 f"angle is {fall:.4g} rad = {fall / scene.alpha:.4g} alpha)")
+        return None, float(phi0)
 
-    raise MissingOption("a ground motion", "--pulse, --record, or --phi0 for free rocking",
+    raise MissingOption("a ground motion", "--pulse, --record, or --phi0 / --phi0-alpha for "
+                        "free rocking",
                         "(nothing would move)")
 
 
-def compare_settings(engines: list[str] | None, args: argparse.Namespace) -> dict | None:
-    """Per-backend settings overrides {backend: {field: value}} for compare.
-
-    ``--setting name=value`` goes to every compared backend whose Settings has the field,
-    ``--setting backend.name=value`` to that backend only; ``--dt`` to every engine with a time
-    step (the analytic reference has none). A setting no compared backend has is an error.
-    """
-    if not args.settings and args.dt is None:
+def engine_names(args: argparse.Namespace, option: str = "--engine") -> list[str] | None:
+    """The engines of a repeatable ``--engine`` (each value a name or a comma-separated list;
+    ``--engines`` is the same option), validated, in order, without duplicates; None when none
+    was given (the command's default)."""
+    given = getattr(args, "engine", None)
+    if not given:
         return None
-    from .engines import REGISTRY, get_backend
-    from .runner import REFERENCE, resolve_engines
+    from .runner import resolve_engines
 
-    names = list(dict.fromkeys([REFERENCE, *resolve_engines(engines, name="--engines")]))
-    targeted: list[tuple[str, str, str]] = []   # (backend or "", field, raw)
-    for key, raw in args.settings:
-        head, dot, tail = key.partition(".")
-        if dot and head in REGISTRY:
-            if head not in names:
-                raise ParameterError(f"--setting {key}", raw,
-                                     f"for a compared backend: {', '.join(names)}")
-            targeted.append((head, tail, raw))
-        else:
-            targeted.append(("", key, raw))
-    out: dict[str, dict[str, Any]] = {}
-    used: set[int] = set()
-    dt_used = False
-    for engine in names:
-        fields = {f.name for f in dataclasses.fields(get_backend(engine).Settings)}
-        mine = []
-        for i, (target, name, raw) in enumerate(targeted):
-            if target == engine or (target == "" and name in fields):
-                mine.append((name, raw))
-                used.add(i)
-        dt = args.dt if "dt" in fields else None
-        dt_used |= dt is not None
-        over = backend_overrides(engine, argparse.Namespace(settings=mine, dt=dt))
-        if over:
-            out[engine] = over
-    for i, (target, name, raw) in enumerate(targeted):
-        if i not in used:
-            raise ParameterError(f"--setting {name}", raw,
-                                 f"a settings field of one of {', '.join(names)}")
-    if args.dt is not None and not dt_used:
-        raise ParameterError("--dt", args.dt, "omitted: none of the compared backends has a "
-                             "time step")
-    return out
+    names = [n.strip() for v in given for n in v.split(",") if n.strip()]
+    if not names:
+        raise ParameterError(option, ",".join(given), "backend names")
+    return resolve_engines(names, name=option)

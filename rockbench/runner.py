@@ -115,7 +115,8 @@ def run_all(scene: Scene, motion=None, *, engines: str | Sequence[str] | None = 
     Returns ``(results, unavailable)``: backend name -> Result (the reference ``"analytic"``
     first), and backend name -> why it could not run here (its engine does not import).
     ``settings`` maps a backend name to its Settings object or a dict of overrides (e.g.
-    ``{"pymunk": {"dt": 2e-4}}``); ``progress`` shows a tqdm bar naming the running backend.
+    ``{"pymunk": {"dt": 2e-4}}``); ``progress`` shows each backend's simulated time
+    (:mod:`rockbench.progress`: a bar on a terminal, a line every few seconds otherwise).
     """
     _check_scene(scene)
     _check_motion(motion)
@@ -129,17 +130,14 @@ def run_all(scene: Scene, motion=None, *, engines: str | Sequence[str] | None = 
                 raise ParameterError("settings", k,
                                      f"keyed by backend names: {', '.join(REGISTRY)}")
     order = [REFERENCE] + [n for n in names if n != REFERENCE]
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=len(order), desc="compare", unit="backend")
+    from .progress import simulated_time
+
     results: dict[str, Result] = {}
     unavailable: dict[str, str] = {}
-    try:
-        for name in order:
-            if bar is not None:
-                bar.set_description(f"{scene.name}: {name}")
-            obj, over = _settings_for(settings, name)
+    for i, name in enumerate(order, 1):
+        obj, over = _settings_for(settings, name)
+        # progress: the simulated time of each backend's run, named with its place in the order
+        with simulated_time(f"{scene.name}: {name} ({i}/{len(order)})", show=progress):
             try:
                 results[name] = run(scene, motion, engine=name, duration=duration, phi0=phi0,
                                     settings=obj, **over)
@@ -147,11 +145,6 @@ def run_all(scene: Scene, motion=None, *, engines: str | Sequence[str] | None = 
                 if name == REFERENCE:
                     raise
                 unavailable[name] = str(e)
-            if bar is not None:
-                bar.update(1)
-    finally:
-        if bar is not None:
-            bar.close()
     return results, unavailable
 
 

@@ -124,7 +124,7 @@ def test_rtol_of_one_or_more_is_refused(capsys):
     for bad in (2.0, 1.0, 0.5):
         with pytest.raises(ParameterError, match="rtol"):
             AnalyticSettings(rtol=bad)
-    refused(capsys, "run", "housner-block", "--phi0", "0.5", "--setting", "rtol=2",
+    refused(capsys, "run", "housner-block", "--phi0-alpha", "0.5", "--setting", "rtol=2",
             names=("rtol",))
 
 
@@ -135,7 +135,7 @@ def test_scene_file_without_structure_is_refused(capsys, tmp_path):
         path.write_text(text)
         with pytest.raises(SceneError, match="structure"):
             rb.load_scene(path)
-        line = refused(capsys, "run", path, "--phi0", "0.5", names=("structure",))
+        line = refused(capsys, "run", path, "--phi0-alpha", "0.5", names=("structure",))
         assert "type" in line
 
 
@@ -166,7 +166,7 @@ def test_very_low_frequency_is_refused_before_allocating(capsys):
 
 def test_huge_duration_is_refused_before_allocating(capsys):
     """Before: pymunk with duration 1e9 tried to allocate 7.28 TiB."""
-    refused(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0", "0.5",
+    refused(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0-alpha", "0.5",
             "--duration", "1e9", names=("duration", "ROCKBENCH_MAX_SAMPLES"))
     scene = rb.load_scene("housner-block")
     for engine in ("analytic", "pymunk"):
@@ -195,11 +195,11 @@ def test_long_default_window_of_a_slow_pulse_is_refused():
 
 def test_unwritable_out_is_one_line(capsys, tmp_path):
     """Before: --out /proc/nope/x.csv ended in FileNotFoundError."""
-    refused(capsys, "run", "housner-block", "--phi0", "0.5", "--duration", "0.5", "--out",
+    refused(capsys, "run", "housner-block", "--phi0-alpha", "0.5", "--duration", "0.5", "--out",
             "/proc/nope/x.csv", names=("--out", "/proc/nope"))
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    refused(capsys, "run", "housner-block", "--phi0", "0.5", "--duration", "0.5", "--out",
+    refused(capsys, "run", "housner-block", "--phi0-alpha", "0.5", "--duration", "0.5", "--out",
             blocker / "x.csv", names=("--out",))
 
 
@@ -208,8 +208,8 @@ def test_out_is_written_atomically(capsys, tmp_path, monkeypatch):
     import pandas as pd
 
     out = tmp_path / "h.csv"
-    code, _, err = cli(capsys, "run", "housner-block", "--phi0", "0.5", "--duration", "0.5",
-                       "--out", out)
+    code, _, err = cli(capsys, "run", "housner-block", "--phi0-alpha", "0.5", "--duration", "0.5",
+                       "--csv", out)
     assert code == 0, err
     good = out.read_text()
     assert len(pd.read_csv(out)) > 10 and (tmp_path / "h_events.csv").is_file()
@@ -220,8 +220,8 @@ def test_out_is_written_atomically(capsys, tmp_path, monkeypatch):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(pd.DataFrame, "to_csv", broken)
-    refused(capsys, "run", "housner-block", "--phi0", "0.4", "--duration", "0.5", "--out", out,
-            names=("--out", "No space left"))
+    refused(capsys, "run", "housner-block", "--phi0-alpha", "0.4", "--duration", "0.5", "--csv", out,
+            names=("--csv", "No space left"))
     assert out.read_text() == good
     assert sorted(p.name for p in tmp_path.iterdir()) == ["h.csv", "h_events.csv"]
 
@@ -285,15 +285,15 @@ def test_phi0_is_checked_against_the_fall_angle_of_its_direction(capsys):
     assert fall[1] < 7.0 < fall[-1]
     t0, t1 = run_window(scene, None, 0.5, -7 * scene.alpha)
     assert (t0, t1) == (0.0, 0.5)
-    code, out, err = cli(capsys, "run", "paper-asymmetric", "--engine", "pymunk", "--phi0", "-7",
+    code, out, err = cli(capsys, "run", "paper-asymmetric", "--engine", "pymunk", "--phi0-alpha", "-7",
                          "--duration", "0.3")
     assert code == 0, err
     assert "phi0 = -7 alpha" in out
     r = rb.run(scene, None, engine="pymunk", phi0=-7 * scene.alpha, duration=0.3)
     assert r.history["phi"].iloc[0] == pytest.approx(-7 * scene.alpha, rel=1e-6)
-    line = refused(capsys, "run", "paper-asymmetric", "--phi0", "7", names=("--phi0",))
+    line = refused(capsys, "run", "paper-asymmetric", "--phi0-alpha", "7", names=("--phi0",))
     assert "6.811" in line and "counterclockwise" in line
-    line = refused(capsys, "run", "paper-asymmetric", "--phi0", "-9", names=("--phi0",))
+    line = refused(capsys, "run", "paper-asymmetric", "--phi0-alpha", "-9", names=("--phi0",))
     assert "8.75" in line and "clockwise" in line
     with pytest.raises(ParameterError, match="clockwise fall angle"):
         rb.run(scene, None, phi0=-9 * scene.alpha, duration=0.5)
@@ -305,7 +305,7 @@ def test_phi0_beyond_the_smaller_fall_angle_runs_on_the_analytic_backend(capsys)
     scene = rb.load_scene("paper-asymmetric")
     r = rb.run(scene, None, phi0=-7 * scene.alpha, duration=0.5)
     assert r.history["phi"].iloc[0] == pytest.approx(-7 * scene.alpha, rel=1e-9)
-    code, out, err = cli(capsys, "run", "paper-asymmetric", "--phi0", "-7", "--duration", "0.5")
+    code, out, err = cli(capsys, "run", "paper-asymmetric", "--phi0-alpha", "-7", "--duration", "0.5")
     assert code == 0, err
 
 
@@ -345,7 +345,7 @@ def test_absurd_atol_and_output_dt_are_refused(capsys):
     """atol=1 ran and reported 7.8 alpha for a block released at 0.5 alpha."""
     for setting, name in (("atol=1", "atol"), ("output_dt=10", "output_dt"),
                           ("rtol=1e-20", "rtol")):
-        refused(capsys, "run", "housner-block", "--phi0", "0.5", "--setting", setting,
+        refused(capsys, "run", "housner-block", "--phi0-alpha", "0.5", "--setting", setting,
                 names=(name, f"ROCKBENCH_{name.upper()}"))
 
 

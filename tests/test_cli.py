@@ -164,10 +164,10 @@ def test_run_record_fixtures(capsys):
     assert h["uplifted"] is False         # 0.076 g < lambda g
 
 
-def test_run_out_writes_history_and_events(tmp_path, capsys):
+def test_run_csv_writes_history_and_events(tmp_path, capsys):
     out = tmp_path / "sub" / "history.csv"
-    d = cli_json(capsys, "run", "paper-symmetric", "--phi0", "0.5", "--duration", "4",
-                 "--out", str(out))
+    d = cli_json(capsys, "run", "paper-symmetric", "--phi0-alpha", "0.5", "--duration", "4",
+                 "--csv", str(out))
     hist = pd.read_csv(out)
     assert list(hist.columns)[: len(HISTORY_COLUMNS)] == list(HISTORY_COLUMNS)
     assert len(hist) == round(4.0 / d["settings"]["output_dt"]) + 1   # fixed output grid
@@ -180,8 +180,42 @@ def test_run_out_writes_history_and_events(tmp_path, capsys):
     assert d["history_csv"] == str(out)
 
 
+def test_run_out_is_a_folder(tmp_path, capsys):
+    out = tmp_path / "run1"
+    d = cli_json(capsys, "run", "housner-block", "--phi0-alpha", "0.5", "--duration", "2",
+                 "--out", str(out))
+    hist, events = pd.read_csv(out / "history.csv"), pd.read_csv(out / "events.csv")
+    assert len(hist) == round(2.0 / d["settings"]["output_dt"]) + 1
+    assert (events["kind"] == "impact").sum() == d["n_impacts"] > 0
+    assert d["history_csv"] == str(out / "history.csv")
+    (tmp_path / "a_file").write_text("x")
+    assert main(["run", "housner-block", "--phi0-alpha", "0.5", "--out",
+                 str(tmp_path / "a_file")]) == 2
+    assert "--out" in capsys.readouterr().err
+
+
+def test_phi0_is_radians_as_in_python(capsys):
+    """--phi0 is in radians, as rb.run(phi0=...); --phi0-alpha in multiples of alpha."""
+    scene = rb.load_scene("housner-block")
+    rad = cli_json(capsys, "run", "housner-block", "--phi0", "0.05", "--duration", "2")
+    ref = rb.run(scene, None, phi0=0.05, duration=2)
+    assert rad["phi0"] == 0.05
+    assert rad["max_abs_phi_over_alpha"] == pytest.approx(ref.summary.max_abs_phi_over_alpha,
+                                                          rel=1e-12)
+    alpha = cli_json(capsys, "run", "housner-block", "--phi0-alpha", str(0.05 / scene.alpha),
+                     "--duration", "2")
+    assert alpha["phi0"] == pytest.approx(0.05, rel=1e-12)
+    assert alpha["max_abs_phi_over_alpha"] == pytest.approx(rad["max_abs_phi_over_alpha"],
+                                                            rel=1e-9)
+    # beyond the fall angle: refused in the unit it was given
+    assert main(["run", "housner-block", "--phi0", "2"]) == 2
+    assert "rad" in capsys.readouterr().err
+    assert main(["run", "housner-block", "--phi0", "0.1", "--phi0-alpha", "0.5"]) == 2
+    assert "--phi0" in capsys.readouterr().err
+
+
 def test_run_human_summary_has_units(capsys):
-    assert main(["run", "housner-block", "--phi0", "-0.3", "--duration", "2"]) == 0
+    assert main(["run", "housner-block", "--phi0-alpha", "-0.3", "--duration", "2"]) == 0
     text = capsys.readouterr().out
     assert "free rocking from phi0 = -0.3 alpha" in text
     assert "rad" in text and "s wall" in text and "real-time factor" in text
@@ -189,7 +223,7 @@ def test_run_human_summary_has_units(capsys):
 
 @needs_pymunk
 def test_run_pymunk_free_rocking(capsys):
-    d = cli_json(capsys, "run", "paper-symmetric", "--engine", "pymunk", "--phi0", "0.5",
+    d = cli_json(capsys, "run", "paper-symmetric", "--engine", "pymunk", "--phi0-alpha", "0.5",
                  "--duration", "1")
     assert RUN_KEYS <= set(d)
     assert isinstance(d["eta_measured"], list)
@@ -200,7 +234,7 @@ def test_run_pymunk_free_rocking(capsys):
 
 @needs_pymunk
 def test_run_pymunk_eta_and_settings(capsys):
-    d = cli_json(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0", "0.5",
+    d = cli_json(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0-alpha", "0.5",
                  "--duration", "3", "--dt", "5e-4", "--setting", "iterations=20")
     assert d["settings"]["dt"] == 5e-4 and d["settings"]["iterations"] == 20
     assert d["steps"] == 6000
@@ -213,7 +247,7 @@ def test_run_pymunk_eta_and_settings(capsys):
 
 @needs_pymunk
 def test_run_coarse_dt_raises_output_interval(capsys):
-    d = cli_json(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0", "0.5",
+    d = cli_json(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0-alpha", "0.5",
                  "--duration", "1", "--dt", "2e-3")
     assert d["settings"]["output_dt"] == 2e-3 and d["steps"] == 500
 
@@ -226,7 +260,7 @@ BAD = [
     (["info", "paper-symmetric", "--set", "span=nan"], "span"),
     (["info", "paper-symmetric", "--set", "column_height_right=9"], "column_height_right"),
     (["info", "paper-symmetric", "--set", "span"], "--set"),
-    (["run", "paper-symmetric", "--engine", "no-such-engine", "--phi0", "0.5"], "engine"),
+    (["run", "paper-symmetric", "--engine", "no-such-engine", "--phi0-alpha", "0.5"], "engine"),
     (["run", "paper-symmetric", "--pulse", "symmetric", "--frequency", "2"], "--amplitude"),
     (["run", "paper-symmetric", "--pulse", "symmetric", "--amplitude", "2"], "--frequency"),
     (["run", "paper-symmetric", "--pulse", "symmetric", "--amplitude", "nan", "--frequency",
@@ -237,20 +271,28 @@ BAD = [
      "--pulse"),
     (["run", "paper-symmetric", "--pulse", "symmetric", "--amplitude", "2", "--frequency", "2",
       "--sign", "2"], "--sign"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--duration", "-5"], "--duration"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--duration", "inf"], "--duration"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--duration", "-5"], "--duration"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--duration", "inf"], "--duration"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0"], "--phi0-alpha"),
+    (["run", "paper-symmetric", "--phi0-alpha", "50"], "--phi0-alpha"),
     (["run", "paper-symmetric", "--phi0", "0"], "--phi0"),
-    (["run", "paper-symmetric", "--phi0", "50"], "--phi0"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--pulse", "symmetric"], "--pulse"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--amplitude", "2"], "--amplitude"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--scale", "2"], "--scale"),
+    (["run", "paper-symmetric", "--phi0", "1.6"], "--phi0"),
+    (["run", "paper-symmetric", "--phi0", "0.01", "--engine", "pymunk", "--engine", "mujoco"],
+     "--engine"),
+    (["run", "paper-symmetric", "--phi0", "0.01", "--engine", "pymunk", "--setting",
+      "mujoco.impratio=2"], "mujoco.impratio"),
+    (["run", "paper-symmetric", "--phi0", "0.01", "--setting", "nosuch.rtol=1"], "ENGINE.KEY"),
+    (["run", "paper-symmetric", "--phi0", "0.01", "--setting", "rtol"], "ENGINE.KEY=VALUE"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--pulse", "symmetric"], "--pulse"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--amplitude", "2"], "--amplitude"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--scale", "2"], "--scale"),
     (["run", "paper-symmetric"], "--phi0"),
     (["run", "paper-symmetric", "--record", "no/such/file.AT2"], "no/such/file.AT2"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--dt", "1e-3"], "--dt"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--setting", "no_such_setting=1"],
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--dt", "1e-3"], "--dt"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--setting", "no_such_setting=1"],
      "no_such_setting"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--setting", "rtol=-1"], "rtol"),
-    (["run", "paper-symmetric", "--phi0", "0.5", "--setting", "method=Euler"], "method"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--setting", "rtol=-1"], "rtol"),
+    (["run", "paper-symmetric", "--phi0-alpha", "0.5", "--setting", "method=Euler"], "method"),
     (["no-such-command"], "no-such-command"),
     ([], "COMMAND"),
 ]
@@ -267,25 +309,42 @@ def test_bad_input_one_line_exit_2(capsys, argv, name):
     assert name in lines[0]
 
 
-@pytest.mark.skipif(not (RECORDS / "sac-la-2in50" / "LA21.dat").is_file(),
-                    reason="shared records not available")
 @pytest.mark.parametrize("extra,name", [([], "--record-dt"),
                                         (["--record-dt", "0.02"], "--record-units"),
-                                        (["--record-dt", "0.02", "--record-units", "ft/s2"],
-                                         "--record-units")])
-def test_headerless_record_needs_dt_and_units(capsys, extra, name):
-    argv = ["run", "paper-symmetric", "--record", str(RECORDS / "sac-la-2in50" / "LA21.dat"),
-            *extra]
-    assert main(argv) == 2
+                                        (["--record-dt", "0.02", "--record-units", "furlong/s2"],
+                                         "record-units")])
+def test_headerless_record_needs_dt_and_units(tmp_path, capsys, extra, name):
+    """A headerless file that no records.csv lists needs --record-dt and --record-units."""
+    data = Path(__file__).resolve().parent / "data" / "records" / "LA21_6s.dat"
+    alone = tmp_path / "LA21_6s.dat"
+    alone.write_bytes(data.read_bytes())
+    assert main(["run", "paper-symmetric", "--record", str(alone), *extra]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and name in err[0]
+
+
+def test_headerless_record_reads_the_records_csv_beside_it(tmp_path, capsys):
+    """``run --record FILE`` takes dt and units from the records.csv beside FILE, as
+    rb.load_record does (issue 23: the CLI refused what Python read)."""
+    data = Path(__file__).resolve().parent / "data" / "records" / "LA21_6s.dat"
+    (tmp_path / "LA21_6s.dat").write_bytes(data.read_bytes())
+    (tmp_path / "records.csv").write_text("record,dt_s,units\nLA21_6s,0.02,cm/s^2\n")
+    d = cli_json(capsys, "run", "paper-asymmetric", "--record", str(tmp_path / "LA21_6s.dat"),
+                 "--duration", "2")
+    rec = rb.load_record(tmp_path / "LA21_6s.dat")
+    assert d["motion"]["dt_s"] == rec.dt == 0.02
+    assert d["motion"]["pga_m_s2"] == pytest.approx(0.74112, abs=1e-9)   # cm/s^2 read as such
+    # given options still win over the listing (and must agree with nothing else)
+    g = cli_json(capsys, "run", "paper-asymmetric", "--record", str(tmp_path / "LA21_6s.dat"),
+                 "--record-units", "m/s2", "--duration", "2")
+    assert g["motion"]["pga_m_s2"] == pytest.approx(74.112, abs=1e-7)
 
 
 @needs_pymunk
 def test_pymunk_bad_settings(capsys):
     for argv, name in ((["--dt", "0.5"], "dt"), (["--setting", "iterations=abc"], "iterations"),
                        (["--setting", "friction=nan"], "friction")):
-        assert main(["run", "housner-block", "--engine", "pymunk", "--phi0", "0.5", *argv]) == 2
+        assert main(["run", "housner-block", "--engine", "pymunk", "--phi0-alpha", "0.5", *argv]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and name in err[0] and err[0].startswith("rockbench: error: ")
 
@@ -298,7 +357,7 @@ def test_unexpected_errors_keep_their_traceback(monkeypatch):
 
     monkeypatch.setattr(rockbench.runner, "run", broken)
     with pytest.raises(RuntimeError, match="a bug"):
-        main(["run", "housner-block", "--phi0", "0.5"])
+        main(["run", "housner-block", "--phi0-alpha", "0.5"])
 
 
 def test_help_exits_0(capsys):
@@ -310,7 +369,7 @@ def test_help_exits_0(capsys):
 @needs_pymunk
 def test_compare_table(tmp_path, capsys):
     csv = tmp_path / "table.csv"
-    d = cli_json(capsys, "compare", "housner-block", "--engines", "pymunk", "--phi0", "0.5",
+    d = cli_json(capsys, "compare", "housner-block", "--engines", "pymunk", "--phi0-alpha", "0.5",
                  "--duration", "2", "--csv", str(csv))
     rows = {r["backend"]: r for r in d["table"]}
     assert list(rows) == ["analytic", "pymunk"]
@@ -318,7 +377,7 @@ def test_compare_table(tmp_path, capsys):
     assert rows["pymunk"]["status"] == "ok"
     assert rows["pymunk"]["nrmse"] < 0.005
     assert pd.read_csv(csv)["backend"].tolist() == ["analytic", "pymunk"]
-    assert main(["compare", "housner-block", "--engines", "pymunk", "--phi0", "0.5",
+    assert main(["compare", "housner-block", "--engines", "pymunk", "--phi0-alpha", "0.5",
                  "--duration", "2"]) == 0
     text = capsys.readouterr().out
     assert "pymunk" in text and "nrmse" in text and "units:" in text
@@ -336,20 +395,20 @@ def test_compare_settings_reach_the_backend(capsys, monkeypatch):
         return real(*args, **kwargs)
 
     monkeypatch.setattr(compare_mod, "compare", spy)
-    cli_json(capsys, "compare", "housner-block", "--engines", "pymunk", "--phi0", "0.5",
+    cli_json(capsys, "compare", "housner-block", "--engines", "pymunk", "--phi0-alpha", "0.5",
              "--duration", "0.5", "--dt", "5e-4", "--setting", "pymunk.iterations=20",
-             "--setting", "rtol=1e-9")
+             "--setting", "analytic.rtol=1e-9")
     assert seen["settings"] == {"analytic": {"rtol": 1e-9},
                                 "pymunk": {"iterations": 20, "dt": 5e-4}}
     assert seen["engines"] == ["pymunk"]
-    assert main(["compare", "housner-block", "--engines", "pymunk", "--phi0", "0.5",
+    assert main(["compare", "housner-block", "--engines", "pymunk", "--phi0-alpha", "0.5",
                  "--setting", "no_such=1"]) == 2
     assert "no_such" in capsys.readouterr().err
 
 
 @needs_pymunk
 def test_compare_report(tmp_path, capsys):
-    assert main(["compare", "housner-block", "--engines", "pymunk", "--phi0", "0.5",
+    assert main(["compare", "housner-block", "--engines", "pymunk", "--phi0-alpha", "0.5",
                  "--duration", "1", "--report", str(tmp_path / "case")]) == 0
     out = capsys.readouterr().out
     path = Path(out.strip().splitlines()[-1].removeprefix("report: "))
@@ -402,7 +461,7 @@ def test_a_broken_compare_module_fails_loudly(monkeypatch):
 
     monkeypatch.setattr(builtins, "__import__", broken)
     with pytest.raises(ImportError, match="simulated"):
-        main(["compare", "housner-block", "--engines", "analytic", "--phi0", "0.5",
+        main(["compare", "housner-block", "--engines", "analytic", "--phi0-alpha", "0.5",
               "--duration", "0.5"])
 
 

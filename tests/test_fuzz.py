@@ -241,7 +241,7 @@ SCENES = ["housner-block", "paper-asymmetric", "paper-symmetric-hybrid"]
 
 @st.composite
 def phi0_over_alpha(draw, scene_name: str, clean: bool = False):
-    """phi0 / alpha for --phi0: within the fall angle of its own direction (valid), beyond it,
+    """phi0 / alpha for --phi0-alpha: within the fall angle of its own direction (valid), beyond it,
     zero or non-finite (invalid)."""
     scene = rb.load_scene(scene_name)
     sign = draw(st.sampled_from([1, -1]))
@@ -456,7 +456,7 @@ def cli_cases(draw, folder: Path):
             x, ok = draw(st.floats(-3.0, 3.0).filter(lambda v: abs(v) > 0.1)), None
         else:
             x, ok = draw(phi0_over_alpha(scene_name, clean))
-        argv += ["--phi0", repr(x)]
+        argv += ["--phi0-alpha", repr(x)]
         flags.append(ok)
     elif motion == "none":
         flags.append(False)

@@ -36,6 +36,7 @@ from ..analytic.closure import closure_function
 from ..analytic.reference import reference_of
 from ..constants import G
 from ..measure import excursions, measure_impacts
+from ..progress import sim_time
 from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
                       output_grid)
 from ..scene.scene import Scene
@@ -326,6 +327,7 @@ class SampleChecks:
         self.checked = n
         if n <= start:
             return
+        sim_time(grid[n - 1], grid[0], grid[-1])   # progress of a long run (rockbench.progress)
         S = states[start:n]
         bad = ~np.isfinite(S).all(axis=(1, 2))
         if bad.any():
