@@ -4,8 +4,9 @@
   through the compiled analytic path;
 * every engine at 12 x 12 x 4 (:data:`MEASURED_GRID`) on a free-standing and a fracturing
   hybrid frame, each overlaid on the analytic map of the same cells and run length, with the
-  fraction of agreeing cells, Cohen's kappa and the shift of the minimum-overturning boundary
-  along A per frequency.
+  fraction of agreeing cells, Cohen's kappa, the shift of the minimum-overturning boundary
+  along A per frequency, and the cells near the analytic boundary (within
+  :data:`rockbench.maps.NEAR_BOUNDARY_MARGIN` in A, where a verdict says little) counted apart.
 
 The engine maps take about 40 minutes on 2 cores, four times the report's budget: ``full=True``
 (``rockbench report --full``) measures them into a folder kept with the report
@@ -23,7 +24,8 @@ from typing import Any, Sequence
 
 import pandas as pd
 
-from .maps import describe_shift, map_agreement, reuse_map, run_map
+from .maps import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement, mark_near_boundary,
+                   reuse_map, run_map)
 
 __all__ = ["ANALYTIC_SCENES", "ANALYTIC_GRID", "ENGINE_SCENES", "ENGINE_GRIDS", "run_maps"]
 
@@ -105,9 +107,9 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
             cells = dict(ENGINE_AXES, grid=g)
             key = (sc, g)
             if key not in out["overlay_ref"]:
-                out["overlay_ref"][key] = run_map(
+                out["overlay_ref"][key] = mark_near_boundary(run_map(
                     sc, "analytic", store=store / f"{sc}_analytic_{g[0]}x{g[1]}.parquet",
-                    **cells, **run)
+                    **cells, **run), sc, tail=ENGINE_AXES["tail"])
             ref = out["overlay_ref"][key]
             out["engine"][(sc, eng)] = df
             ag = map_agreement(ref, df)
@@ -121,9 +123,17 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
                          "boundary_shift_mean": float(shift.mean()) if len(shift) else None,
                          "boundary_shift_max_abs": float(shift.abs().max()) if len(shift)
                          else None,
-                         "not_ok": int((df["status"] != "ok").sum()), "in_words": words})
+                         "not_ok": int((df["status"] != "ok").sum()),
+                         "near_boundary": ag["near_boundary"],
+                         "disagree_near_boundary": ag["disagree_near_boundary"],
+                         "disagree_away": ag["disagree_away"], "in_words": words})
             out["words"].append(f"{eng} on {sc} ({g[0]}x{g[1]}x4 cells): "
                                 f"{100 * ag['fraction']:.1f} % of the verdicts agree with the "
-                                f"analytic map (Cohen's kappa {ag['kappa']:.3f}); {words}.")
+                                f"analytic map (Cohen's kappa {ag['kappa']:.3f}); "
+                                f"{ag['near_boundary']} cells lie within "
+                                f"{100 * NEAR_BOUNDARY_MARGIN:g} % in A of the analytic boundary "
+                                f"(near the boundary), {ag['disagree_near_boundary']} differing "
+                                f"verdicts there and {ag['disagree_away']} away from it; "
+                                f"{words}.")
     out["agreement"] = pd.DataFrame(rows)
     return out

@@ -337,7 +337,8 @@ def _load_scene_ref(ref: Any, overrides: dict | None = None):
 
 def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
                    extra: float = 0.0) -> pd.DataFrame:
-    """Map rows of analytic ``cells``, each run for its map length plus ``extra`` seconds."""
+    """Map rows of analytic ``cells`` in their order, each run for its map length plus
+    ``extra`` seconds."""
     if method == "compiled":
         from .analytic.compiled import run_pulse_grid
         if tail is None and not extra:
@@ -345,10 +346,13 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
         else:
             t = 10.0 if tail is None else tail
             byw: dict[float, list] = {}
-            for c in cells:
-                byw.setdefault(c[3], []).append(c)
-            df = pd.concat([run_pulse_grid(scene, cs, duration=_duration(scene, w, t + extra))
-                            for w, cs in byw.items()], ignore_index=True)
+            for i, c in enumerate(cells):
+                byw.setdefault(c[3], []).append(i)
+            df = pd.concat([run_pulse_grid(scene, [cells[i] for i in ix],
+                                           duration=_duration(scene, w, t + extra))
+                            for w, ix in byw.items()], ignore_index=True)
+            order = np.concatenate([np.asarray(ix) for ix in byw.values()])
+            df = df.iloc[np.argsort(order, kind="stable")].reset_index(drop=True)  # cells' order
         df["wall_s"] = df["cpu_s"]
         return df[list(MAP_COLUMNS)]
     from .runner import run

@@ -345,3 +345,16 @@ def test_cells_near_the_reference_boundary_are_labelled():
     ag = map_agreement(out, df)
     assert ag["near_boundary"] == int(out["near_boundary"].sum()) > 0
     assert ag["disagree_near_boundary"] == ag["disagree_away"] == 0
+
+
+def test_analytic_rows_keep_the_order_of_their_cells():
+    """Rows come back in the order of the cells given, over several frequencies (what the
+    fall extension and the near-boundary marks rely on: they match rows by position)."""
+    import random
+
+    from rockbench.maps import _analytic_rows
+
+    cells = map_cells(grid=(4, 3), amplitude="2:8", frequency="3:6", pulses="all")
+    random.Random(1).shuffle(cells)
+    df = _analytic_rows(rb.load_scene("paper-asymmetric"), cells, "compiled", 3.0)
+    assert [(r.pulse, r.sign, r.amplitude, r.frequency) for r in df.itertuples()] == cells

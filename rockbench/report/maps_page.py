@@ -23,6 +23,9 @@ AGREEMENT_COLUMNS: dict[str, str] = {
                            "A_min(analytic) (negative: the engine overturns earlier)",
     "boundary_shift_max_abs": "-, largest |A_min(engine) - A_min(analytic)|",
     "not_ok": "-, engine cells that did not finish ok",
+    "near_boundary": "-, cells within 2 % in A of the analytic boundary (near the boundary)",
+    "disagree_near_boundary": "-, differing verdicts near the boundary",
+    "disagree_away": "-, differing verdicts away from the boundary",
     "in_words": "-, where the engine's boundary sits relative to the analytic one",
 }
 
