@@ -72,7 +72,8 @@ CONTACT_VARIANTS: dict[str, list[dict[str, Any]]] = {
                {"impedance": 0.95}, {"impedance": 0.999}, {"impratio": 1.0},
                {"impratio": 10.0}, {"noslip_iterations": 10}],
     "pybullet": [{"contact_erp": 0.2}, {"contact_erp": 0.02}, {"solver_iterations": 150},
-                 {"contact_breaking_threshold": 1e-4}],
+                 {"contact_breaking_threshold": 1e-4}, {"split_impulse": False},
+                 {"split_impulse": True}, {"contact_slop": 1e-4}, {"restitution": 0.1}],
     "pymunk": [{"iterations": 60}, {"iterations": 100}, {"collision_slop": 1e-4},
                {"collision_slop": 1e-3}, {"collision_bias": 0.9 ** 300}],
     "opensees": [{"toe_stiffness": 1e11}, {"toe_stiffness": 1e12}, {"integrator": "hht",
@@ -168,7 +169,8 @@ def held_out_stats(runs: pd.DataFrame, tolerance: float) -> dict[str, Any]:
 
 
 def _pct(e: float) -> str:
-    return "inf" if not math.isfinite(e) else f"{100 * e:.3g} %"
+    e = _num(e)
+    return "not run" if math.isnan(e) else "inf" if not math.isfinite(e) else f"{100 * e:.3g} %"
 
 
 def _fmt_err(e: float) -> str:
@@ -435,9 +437,11 @@ class Advice:
             lines.append("  contact settings measured (impact probes: free-rocking eta and the "
                          "smallest-uplift record, choice part):")
             for _, c in self.contact.iterrows():
+                ch = _num(c.get("change"))
                 lines.append(f"    {c['engine']} {c['variant'] or 'defaults'}: probe error "
                              f"{_pct(c['probe_error'])} (eta {_pct(c['eta_error'])}, record "
-                             f"{_pct(c['record_error'])}), change {c['change']:+.3g} x")
+                             f"{_pct(c['record_error'])})"
+                             + (f", {ch:.3g} x the defaults'" if math.isfinite(ch) else ""))
         return "\n".join(lines)
 
 
@@ -571,7 +575,8 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
                 lab = ",".join(f"{k}={v[k]}" for k in sorted(v))
                 contact_rows.append({"engine": n, "variant": lab, knob: default_val,
                                      "probe_error": e, "eta_error": e1, "record_error": e2,
-                                     "change": e / b_err if b_err > 0 else math.nan})
+                                     "change": e / b_err if 0 < b_err < math.inf
+                                     and math.isfinite(e) else math.nan})
                 if e < 0.9 * b_err:
                     helpful.append((e, v))
             helpful.sort(key=lambda x: x[0])
@@ -628,15 +633,17 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
 def advice_for_report(table: pd.DataFrame, tolerances: Sequence[float] = (0.02, 0.002)
                       ) -> pd.DataFrame:
     """For the report: one row per (tolerance, engine) of :func:`decide` on a tradeoff table
-    (columns tolerance [-], rank, engine, status, setting, dt [s], worst_error_choice and
-    worst_error_heldout [-], worst_error [-] (over both parts), cpu_per_sim_s [s/s, steady
-    state], real_time_factor [-], erratic, reason): the recommendation is rank 1 of each
-    tolerance when its status is "meets"."""
+    (columns tolerance [-], rank, engine, status, setting, dt [s], worst_error [-] (on the
+    choice part), held_out_worst_error [-], cpu_per_sim_s [s/s, steady state],
+    real_time_factor [-], erratic, reason): the recommendation is rank 1 of each tolerance when
+    its status is "meets"."""
     rows = []
     for tol in tolerances:
         for i, r in enumerate(decide(table, tol), 1):
-            rows.append({"tolerance": float(tol), "rank": i, **{k: r.get(k) for k in (
-                "engine", "status", "setting", "dt", "worst_error_choice",
-                "worst_error_heldout", "worst_error", "cpu_per_sim_s", "real_time_factor",
-                "erratic", "reason")}})
+            rows.append({"tolerance": float(tol), "rank": i,
+                         **{k: r.get(k) for k in ("engine", "status", "setting", "dt")},
+                         "worst_error": r.get("worst_error_choice"),
+                         "held_out_worst_error": r.get("worst_error_heldout"),
+                         **{k: r.get(k) for k in ("cpu_per_sim_s", "real_time_factor",
+                                                  "erratic", "reason")}})
     return pd.DataFrame(rows)

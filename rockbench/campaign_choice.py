@@ -1,13 +1,13 @@
-"""The "choosing a modelling approach" part of the default campaign (issue 13): work-precision
-of every engine on the paper's asymmetric frame (the whole validation set of
-:func:`rockbench.validation.validation_set`, three time steps, process CPU time), the advice it
-supports at 2 % and 0.2 %, and the stability sweep (the fast form of ``rockbench stress``;
-``full=True`` runs its full form).
+"""The "choosing a modelling approach" part of the default campaign (issues 13, 24):
+work-precision of every engine on the paper's asymmetric frame (the quick evidence of
+:func:`rockbench.validation.validation_set` - a subset of the default one, split into a choice
+and a held-out part - at three time steps; ``full=True``: the default evidence; steady-state
+process CPU time), the advice it supports at 2 % and 0.2 % (chosen on the choice part,
+confirmed on the held-out part, :func:`rockbench.advise.decide`), and the stability sweep (the
+fast form of ``rockbench stress``; ``full=True`` runs its full form).
 
-Measured on 2 cores: the work-precision part costs about 105 s of CPU and the fast stability
-sweep about 75 s (both dominated by PyBullet and OpenSees). Self-consistency (each setting
-against the same engine at dt / 4) is left to ``rockbench tradeoff`` (``docs/choosing.md``).
-Results are kept in the campaign's store.
+Self-consistency (each setting against the same engine at dt / 4) is left to ``rockbench
+tradeoff`` (``docs/choosing.md``). Results are kept in the campaign's store.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     or None, "words": [str]}: the
     stability sweep runs in its fast form (``full``: the full form; ``quick``: none)."""
     from .advise import advice_for_report
+    from .scene.scene import load_scene
     from .stress import breaking_points, stress
     from .tradeoff import tradeoff
 
@@ -39,8 +40,11 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     if not names:
         return {"tradeoff": pd.DataFrame(), "advice": pd.DataFrame(), "stress": None,
                 "breaks": None, "words": []}
+    from .validation import validation_set
+
     dts = CHOICE_DTS[:2] if quick else CHOICE_DTS
-    t = tradeoff(CHOICE_SCENE, names, dts=dts, repeat=1, quick=quick,
+    cases = validation_set(load_scene(CHOICE_SCENE), size="default" if full else "quick")
+    t = tradeoff(CHOICE_SCENE, names, dts=dts, repeat=1, cases=cases,
                  self_consistency="none", workers=workers, store=store / "tradeoff",
                  progress=progress)
     advice = advice_for_report(t.table)
@@ -62,9 +66,12 @@ def recommendation(advice: pd.DataFrame) -> list[str]:
         pct = f"{100 * tol:g} %"
         if len(meets):
             b = meets.iloc[0]
+            ho = b.get("held_out_worst_error", float("nan"))
+            ho_text = (f", {100 * ho:.2f} % on the held-out cases" if ho == ho else "")
             text = (f"Within {pct} of the analytic model on {CHOICE_SCENE} (worst error over "
-                    f"the validation set): use {b['engine']} with {b['setting']} "
-                    f"(worst error {100 * b['worst_error']:.2f} %, "
+                    f"the choice part of the evidence, confirmed on its held-out part): use "
+                    f"{b['engine']} with {b['setting']} "
+                    f"(worst error {100 * b['worst_error']:.2f} %{ho_text}, "
                     f"{b['cpu_per_sim_s']:.3g} CPU s per simulated s, real-time factor "
                     f"{b['real_time_factor']:.3g})")
             from .advise import TIE

@@ -61,7 +61,10 @@ def add_choosing_commands(sub) -> None:
                    help="relative bound on the worst validation error (0.02 = 2 %%)")
     add_engine_option(p, "every registered engine")
     p.add_argument("--quick", action="store_true",
-                   help="reduced validation set, one repeat, dt 4e-3..1e-3 (a first look)")
+                   help="the quick evidence (a subset of the default), one repeat: a first "
+                        "look, with its own held-out error")
+    p.add_argument("--full", action="store_true",
+                   help="the full evidence and the search of the contact parameters (slow)")
     p.add_argument("--store", metavar="PATH", help="result store folder (reused on a rerun)")
     p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
     p.add_argument("--json", action="store_true", help="print the advice as JSON")
@@ -154,8 +157,11 @@ def cmd_advise(args: argparse.Namespace) -> int:
     from .cli import _print_json
 
     scene = load_scene_from(args)
+    full = bool(getattr(args, "full", False))   # --full: the full evidence, contact search
+    if args.quick and full:
+        raise ParameterError("--quick", True, "not together with --full")
     a = advise(scene, args.tolerance, engine_names(args), args.store, quick=args.quick,
-               progress=not args.quiet, **_executor(args))
+               full=full, progress=not args.quiet, **_executor(args))
     if args.json:
         _print_json(a.to_json())
     else:

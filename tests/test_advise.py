@@ -253,3 +253,15 @@ def test_the_report_headline_names_a_cost_tie_and_the_larger_margin():
     assert "A tie on cost with b" in tie and "b (dt=0.001) has the largest margin" in tie
     clear = recommendation(frame(0.05))[0]
     assert "tie" not in clear and "in order of cost: b" in clear
+
+
+@pytest.mark.parametrize("engine", sorted(A.CONTACT_VARIANTS))
+def test_every_contact_variant_is_a_valid_setting_of_its_engine(engine):
+    """The contact search (advise --full) varies fields each engine's Settings has, within
+    their validated ranges (PyBullet's split_impulse, contact_slop and restitution included)."""
+    from rockbench.engines import get_backend
+
+    cls = get_backend(engine).Settings
+    for v in A.CONTACT_VARIANTS[engine]:
+        s = cls(**v)
+        assert all(getattr(s, k) == x for k, x in v.items())
