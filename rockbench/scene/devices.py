@@ -26,6 +26,9 @@ from typing import Any
 from ..errors import ParameterError, check_nonnegative, check_positive
 from .schema import fields_of
 
+#: smallest fracture strain [-]: 0.01 %, far below any tendon's (steel yields near 0.2 %)
+MIN_FRACTURE_STRAIN = 1e-4
+
 __all__ = ["Devices"]
 
 
@@ -40,7 +43,7 @@ class Devices:
     tendon_length : float
         Free length l [m], > 0 (paper: 8.5).
     fracture_strain : float or None
-        eps_f [-], in (0, 1), or None (say it: ``fracture_strain=None``) for tendons that never
+        eps_f [-], in [1e-4, 1), or None (say it: ``fracture_strain=None``) for tendons that never
         fracture (paper: None, 0.02, 0.01).
     damping : float
         Damper constant C [N s/m], >= 0 (paper: 25.3e6). 0 means no dampers.
@@ -64,9 +67,12 @@ class Devices:
         object.__setattr__(self, "damping", check_nonnegative("damping", self.damping))
         if self.fracture_strain is not None:
             eps = check_positive("fracture_strain", self.fracture_strain)
-            if eps >= 1.0:
+            if not MIN_FRACTURE_STRAIN <= eps < 1.0:
                 raise ParameterError("fracture_strain", self.fracture_strain,
-                                     "in (0, 1) or None (no fracture)")
+                                     f"in [{MIN_FRACTURE_STRAIN:g}, 1) or None (no fracture)",
+                                     "no tendon breaks below 0.01 % strain (tendon steel "
+                                     "yields near 0.2 %); a smaller strain is reached by the "
+                                     "round-off of the structure at rest")
             object.__setattr__(self, "fracture_strain", eps)
 
     @property

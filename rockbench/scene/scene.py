@@ -187,7 +187,7 @@ class Scene:
                                   or not isinstance(data["version"], int)):
             raise SceneError(f"{source}: version must be an integer, got {data['version']!r}")
         preset = data.get("preset")
-        if preset is not None and preset not in _PRESETS:
+        if preset is not None and (not isinstance(preset, str) or preset not in _PRESETS):
             raise SceneError(f"{source}: preset = {preset!r}: the presets are "
                              f"{', '.join(repr(p) for p in _PRESETS)} (or leave preset out)")
         devices = None
@@ -206,6 +206,7 @@ class Scene:
                                      '"none" for tendons that never fracture')
                 dv["fracture_strain"] = None
             _check_required(f"{source} [devices]", dv, "devices")
+            _check_values("devices", dv)
             devices = Devices(**dv)
         kinds = " or ".join(repr(k) for k in sorted(_STRUCTURES, reverse=True))
         if "structure" not in data:
@@ -232,6 +233,7 @@ class Scene:
             st = {**base, **st}
         st = {k: v for k, v in st.items() if v is not None}
         _check_required(f"{source} [structure]", st, kind)
+        _check_values(kind, st)       # ranges first: no arithmetic on a 1e-200 m column
         structure = cls_(**st)
         return cls(structure=structure, devices=devices, name=str(data.get("name", "custom")),
                    description=str(data.get("description", "")),
@@ -292,12 +294,8 @@ def _check_ranges(structure: Block | Frame, devices: Devices | None) -> None:
     """Every field within its physical range (:data:`rockbench.limits.LIMITS`, per
     :mod:`rockbench.scene.schema`), checked before any arithmetic on the fields."""
     for obj, table in ((structure, structure.kind), (devices, "devices")):
-        if obj is None:
-            continue
-        for f in fields_of(table):
-            value = getattr(obj, f.name)
-            if f.limit is not None and value is not None:
-                check_in_limit(f.limit, f.name, value)
+        if obj is not None:
+            _check_values(table, {f.name: getattr(obj, f.name) for f in fields_of(table)})
     if isinstance(structure, Frame) and structure.beam_mass is not None:
         lo, hi = LIMITS["mass_ratio"].current()
         m = structure.mass_left
@@ -307,6 +305,14 @@ def _check_ranges(structure: Block | Frame, devices: Devices | None) -> None:
                                  f"in [{lo * m:.4g}, {hi * m:.4g}] kg",
                                  f"{lo:g} to {hi:g} x the left column's {m:.4g} kg: "
                                  f"{override_hint('mass_ratio')}")
+
+
+def _check_values(table: str, values: Mapping[str, Any]) -> None:
+    """Each value of ``values`` (fields of ``table``) within its limit, in the schema's order."""
+    for f in fields_of(table):
+        value = values.get(f.name)
+        if f.limit is not None and value is not None:
+            check_in_limit(f.limit, f.name, value)
 
 
 def restitution(structure: Block | Frame, pre: int, post: int) -> float:

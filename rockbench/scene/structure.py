@@ -186,13 +186,17 @@ class Frame:
         _given(self, tuple(n for n in ("beam_gyration_radius", "mass_ratio", "beam_mass")
                            if getattr(self, n) is not None))
         if self.beam_mass is not None and self.mass_ratio is not None:
-            implied = self.beam_mass / self.mass_left
-            if abs(implied - self.mass_ratio) > 1e-9 * self.mass_ratio:
+            m = self.mass_left   # 0 or inf for lengths out of range: the Scene refuses those
+            usable = 0.0 < m < math.inf and math.isfinite(self.mass_ratio * m)
+            if usable and not abs(self.beam_mass - self.mass_ratio * m) <= (
+                    1e-9 * self.mass_ratio * m):
+                implied = self.beam_mass / m
                 raise ParameterError("mass_ratio", self.mass_ratio,
                                      f"beam_mass / left column mass = {implied:.10g}, or left out",
                                      f"beam_mass = {self.beam_mass:g} kg is given too, and the "
                                      f"left column weighs {self.mass_left:g} kg")
-            object.__setattr__(self, "mass_ratio", None)
+            if usable:
+                object.__setattr__(self, "mass_ratio", None)
         if self.column_height_right > self.column_height_left:
             raise ParameterError("column_height_right", self.column_height_right,
                                  f"<= column_height_left = {self.column_height_left:g}",

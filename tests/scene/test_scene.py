@@ -143,7 +143,7 @@ def test_bad_overrides():
         load_scene("paper-asymmetric", {"beam.width": "10"})
     with pytest.raises(ParameterError) as e:
         load_scene("paper-asymmetric", {"span": "-1"})
-    check_error(e.value, "span", "> 0")
+    check_error(e.value, "span", "[0.001, 1000] m")     # the range, before any arithmetic
     with pytest.raises(ParameterError) as e:
         load_scene("paper-asymmetric", {"span": "12.5"})   # the 13 m beam no longer covers both
     check_error(e.value, "beam_width", "span + column_width")
@@ -218,7 +218,26 @@ def test_bad_fall_angle(bad):
 def test_bad_fracture_strain(bad):
     with pytest.raises(ParameterError) as e:
         dev(fracture_strain=bad)
-    check_error(e.value, "fracture_strain", None if not math.isfinite(bad) else "> 0")
+    check_error(e.value, "fracture_strain", None if not math.isfinite(bad) or bad > 0
+                else "> 0")
+
+
+@FAST
+@given(bad=st.floats(min_value=5e-324, max_value=0.99999e-4))
+def test_fracture_strain_below_a_hundredth_of_a_percent_is_rejected(bad):
+    """Found by the geometry fuzz: eps_f = 6.7e-135 was accepted and the analytic model's
+    fracture angle then failed (brentq: the round-off strain at rest already exceeds it)."""
+    with pytest.raises(ParameterError) as e:
+        dev(fracture_strain=bad)
+    check_error(e.value, "fracture_strain", "[0.0001, 1)")
+
+
+def test_the_smallest_fracture_strain_gives_a_fracture_angle():
+    from rockbench.analytic.reference import Reference
+
+    ref = Reference(Scene(PAPER_FRAME, dev(fracture_strain=1e-4)))
+    for s in (1, -1):
+        assert 0.0 < ref.fracture_angle[s] < 1e-3
 
 
 @FAST
@@ -226,7 +245,7 @@ def test_bad_fracture_strain(bad):
 def test_fracture_strain_of_one_or_more_is_rejected(bad):
     with pytest.raises(ParameterError) as e:
         dev(fracture_strain=bad)
-    check_error(e.value, "fracture_strain", "(0, 1)")
+    check_error(e.value, "fracture_strain", "[0.0001, 1)")
 
 
 @FAST

@@ -450,3 +450,20 @@ def test_fuzz_scene_geometry_extremes(data):
         assert math.isfinite(ref.lam[s]) and s * ref.lam[s] > 0.0
     if isinstance(st_, Block) or st_.symmetric:
         assert max(ref.eta.values()) <= 1.0 + 1e-15
+
+
+@pytest.mark.parametrize("length", [1e-200, 1e200])
+def test_lengths_out_of_range_are_named_even_with_both_beam_masses(length):
+    """Frame checks beam_mass against mass_ratio x m_AB; with lengths out of range m_AB is 0 or
+    inf and no arithmetic on it may happen first: the error names the length."""
+    data = {"structure": {**PAPER, "column_width": length, "column_height_left": length,
+                          "column_height_right": length, "beam_mass": 5.0, "mass_ratio": 2.0}}
+    with pytest.raises(ParameterError) as e:
+        Scene.from_dict(data)
+    assert e.value.name == "column_width"
+
+
+@pytest.mark.parametrize("preset", [["paper"], {"a": 1}, 3, True, "Paper"])
+def test_a_preset_that_is_not_a_preset_name_is_refused(preset):
+    with pytest.raises(SceneError, match="presets are 'paper'"):
+        Scene.from_dict({"preset": preset, "structure": {"type": "frame"}})
