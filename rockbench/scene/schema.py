@@ -160,9 +160,10 @@ this page. -->
 
 A scene is a structure (a rigid block, or the rocking frame: two rigid columns capped by a rigid
 beam, joined by contacts only), its optional devices (tendons and dampers, frames only) and a
-few options. It is data: a TOML file, or a `rockbench.Scene` in Python. Every command that takes
-a scene takes a built-in name (`rockbench scenes` lists them), a path to a `.toml` file or, in
-Python, a `Scene` object.
+few options. It is data: a TOML file, or a `rockbench.Scene` in Python. Every command takes a
+built-in scene name (`rockbench scenes` lists them) or a path to a `.toml` file; in Python
+`rb.load_scene` turns either into a `Scene`, and every function that takes a scene name or
+file (`advise`, `tradeoff`, `run_map`, ...) takes a `Scene` too.
 
 ```toml
 name = "bridge-bent"
