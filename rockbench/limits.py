@@ -7,7 +7,8 @@ record files, settings) passes through a check here *before anything is allocate
 * sizes: history samples = duration / output_dt (:data:`LIMITS` ``max_samples``) and engine
   steps = duration / dt (``max_steps``), estimated in :func:`rockbench.engines.base.run_window`;
 * ranges: the dimensionless pulse coordinates A and W, a pulse's amplitude and period, a
-  record's time step and file size, the analytic solver's tolerances and the output interval.
+  record's time step, file size and number of samples, the analytic solver's tolerances and
+  the output interval.
 
 Each limit can be changed without editing code by an environment variable, which every error
 message names: ``ROCKBENCH_MAX_SAMPLES=1e8`` (a maximum) or ``ROCKBENCH_W_RANGE=0.001,1e4`` (a
@@ -23,7 +24,8 @@ from typing import Any
 
 from .errors import ParameterError, check_finite
 
-__all__ = ["Limit", "LIMITS", "limit", "check_in_limit", "check_size", "override_hint"]
+__all__ = ["Limit", "LIMITS", "limit", "check_in_limit", "check_size", "check_count",
+           "override_hint"]
 
 
 @dataclass(frozen=True)
@@ -103,6 +105,10 @@ LIMITS: dict[str, Limit] = {lim.key: lim for lim in (
           why="time step of a ground-motion record (accelerograms use 0.001-0.02 s)"),
     Limit("record_bytes", None, 1e8, unit="bytes",
           why="size of a record file (an accelerogram is ~100 kB)"),
+    Limit("record_samples", None, 2e6,
+          why="samples of one record (2e6 samples = 5.6 h at 0.01 s; a Record holds ~60 "
+              "bytes per sample; the files are parsed in blocks and refused as soon as they "
+              "pass it)"),
     Limit("rtol", 1e-13, 1e-3,
           why="relative tolerance of the analytic solver (rtol >= 1 is no accuracy at all)"),
     Limit("atol", 1e-16, 1e-3,
@@ -162,3 +168,12 @@ def check_size(key: str, name: str, value: Any, count: float, what: str) -> None
     if not count <= hi:  # also NaN
         raise ParameterError(name, value, f"small enough for <= {hi:g} {what.split(' (')[0]}",
                              f"it gives {count:.3g} {what}; {override_hint(key)}")
+
+
+def check_count(key: str, name: str, count: int, what: str) -> None:
+    """Refuse ``count`` items (``what``: "samples") of ``name`` beyond the maximum ``key``
+    (checked on a length, before anything is copied or allocated)."""
+    _, hi = LIMITS[key].current()
+    if not count <= hi:
+        raise ParameterError(name, f"{count} {what}", f"at most {hi:g} {what}",
+                             override_hint(key))

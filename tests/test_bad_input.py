@@ -354,3 +354,130 @@ def test_a_string_for_a_number_in_a_scene_file_is_refused(tmp_path):
     path.write_text('[structure]\ntype = "block"\nwidth = "1"\n')
     with pytest.raises(SceneError, match="width"):
         rb.load_scene(path)
+
+
+# --- issue 22 section 3: records and settings that cannot lie --------------------------------------
+def test_at2_in_cm_s2_is_not_read_as_g(capsys, tmp_path):
+    """'UNITS: CM/S^2' was read as g (a 0.3 g record became 294 g and the block overturned):
+    the header's units are read, the samples converted, and the block rocks as under 0.3 g."""
+    acc = 0.3 * 980.665 * np.sin(2 * np.pi * np.arange(300) * 0.01)      # cm/s^2, 0.3 g
+    body = "\n".join(" ".join(f"{v:.4f}" for v in acc[i:i + 5]) for i in range(0, 300, 5))
+    path = tmp_path / "cm.AT2"
+    path.write_text(f"AGENCY\nSTATION\nUNITS: CM/S^2\nNPTS= 300, DT= .0100 SEC\n{body}\n")
+    rec = rb.load_record(path)
+    assert rec.peak == pytest.approx(0.3 * 9.80665, rel=1e-4)
+    code, out, err = cli(capsys, "run", "housner-block", "--record", path, "--duration", "4")
+    assert code == 0, err
+    res = rb.run(rb.load_scene("housner-block"), rec, duration=4.0)
+    assert not res.summary.overturned
+
+
+def test_at2_in_an_unknown_unit_is_one_line(capsys, tmp_path):
+    path = tmp_path / "u.AT2"
+    path.write_text("A\nB\nUNITS: FURLONG/S^2\nNPTS= 3, DT= .0100 SEC\n1 2 3\n")
+    refused(capsys, "run", "housner-block", "--record", path,
+            names=("FURLONG/S^2", "cm/s^2", "gal"))
+
+
+@pytest.mark.parametrize("bad", [123, None, 1.5, ["a.AT2"], b"x.AT2", ""])
+def test_record_functions_refuse_a_path_that_is_not_one(bad):
+    """rb.load_record(123, ...) was a TypeError traceback: every public function of
+    scene/records.py names its path argument."""
+    from rockbench.scene import records as R
+
+    calls = [lambda: rb.load_record(bad, dt=0.01, units="g"),
+             lambda: R.load_at2(bad), lambda: R.load_columns(bad, dt=0.01, units="g"),
+             lambda: R.listed_metadata(bad), lambda: R.find_records(bad)]
+    for call in calls:
+        with pytest.raises(ParameterError, match="path|records_dir"):
+            call()
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"dt": "abc", "units": "g"}, "record-dt"), ({"dt": [0.01], "units": "g"}, "record-dt"),
+    ({"dt": 0.01, "units": 9.81}, "record-units"), ({"dt": 0.01, "units": ["g"]}, "record-units"),
+    ({"dt": 0.01, "units": "g", "scale": "x"}, "record-scale"),
+    ({"dt": 0.01, "units": "g", "scale": None}, "record-scale"),
+])
+def test_load_record_wrong_types_name_the_argument(tmp_path, kwargs, name):
+    path = tmp_path / "x.dat"
+    path.write_text("1 2 3\n")
+    with pytest.raises(ParameterError, match=name):
+        rb.load_record(path, **kwargs)
+
+
+def test_motion_functions_refuse_wrong_types():
+    """Public functions of scene/motion.py: a wrong type is a ParameterError naming it."""
+    from rockbench.scene.motion import Record, motion_from_spec, parse_units
+
+    block = rb.load_scene("housner-block")
+    pulse = rb.RickerPulse.dimensionless(2.0, 3.0, block.structure)
+    rec = Record.from_samples([0.0, 1.0, 0.0], 0.01)
+    calls = {
+        "t": [lambda: pulse.acceleration("x"), lambda: rec.acceleration(None),
+              lambda: rec.acceleration({"t": 1})],
+        "units": [lambda: parse_units(3), lambda: Record.from_samples([1, 2], 0.01, units=None)],
+        "units_in": [lambda: Record([0, 1], [1, 2], units_in=["g"])],
+        "dt": [lambda: Record.from_samples([1, 2], "fast")],
+        "amplitude": [lambda: rb.RickerPulse("big", 1.0)],
+        "shape": [lambda: rb.RickerPulse(1.0, 1.0, shape=3)],
+        "sign": [lambda: rb.RickerPulse(1.0, 1.0, sign="+")],
+        "motion": [lambda: motion_from_spec("ricker")],
+        "motion.path": [lambda: motion_from_spec({"kind": "record", "path": 123})],
+        "factor": [lambda: rec.scaled("two"), lambda: pulse.scaled(None)],
+        "time": [lambda: Record("abc", [1, 2])],
+    }
+    for name, fs in calls.items():
+        for f in fs:
+            with pytest.raises(ParameterError) as info:
+                f()
+            assert info.value.name == name, (name, str(info.value))
+
+
+def test_a_record_of_1e7_lines_is_refused_with_bounded_memory(monkeypatch, tmp_path):
+    """A 20 MB record of 1e7 lines took 3.6 GB before it was refused: the file is parsed in
+    blocks and refused once it passes the limit record_samples. Here the limit is 1e4 and the
+    file 2e6 lines (8 MB): parsing it whole as before took over 100 MB; now the peak is a few
+    blocks."""
+    import tracemalloc
+
+    monkeypatch.setenv("ROCKBENCH_RECORD_SAMPLES", "1e4")
+    path = tmp_path / "long.txt"
+    path.write_text("0.1\n" * 2_000_000)
+    tracemalloc.start()
+    try:
+        with pytest.raises(RecordError, match=r"2000000 values, more than 10000.*"
+                                              "ROCKBENCH_RECORD_SAMPLES"):
+            rb.load_record(path, dt=0.01, units="g")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 20e6, peak            # the whole-file parse took > 100 MB
+
+
+def test_record_samples_limit_holds_for_every_loader(monkeypatch, tmp_path):
+    """The limit record_samples holds exactly (n accepted, n + 1 refused) for samples, t a
+    files, AT2 files (from NPTS, before reading a value) and Record objects."""
+    from rockbench.scene.motion import Record
+
+    monkeypatch.setenv("ROCKBENCH_RECORD_SAMPLES", "100")
+    ok, over = tmp_path / "ok.txt", tmp_path / "over.txt"
+    ok.write_text("0.1 0.2 0.3 0.4\n" * 25)
+    over.write_text("0.1 0.2 0.3 0.4\n" * 25 + "0.5\n")
+    assert rb.load_record(ok, dt=0.01, units="g").npts == 100
+    with pytest.raises(RecordError, match="101 values, more than 100"):
+        rb.load_record(over, dt=0.01, units="g")
+    ta = tmp_path / "ta.txt"
+    ta.write_text("".join(f"{0.01 * k:.2f} 0.1\n" for k in range(100)))
+    assert rb.load_record(ta, dt=0.01, units="g").npts == 100
+    ta.write_text("".join(f"{0.01 * k:.2f} 0.1\n" for k in range(101)))
+    with pytest.raises(RecordError, match="more than 100"):
+        rb.load_record(ta, dt=0.01, units="g")
+    at2 = tmp_path / "x.AT2"
+    at2.write_text("UNITS OF G\nNPTS= 101, DT= .01\n" + "0.1\n" * 101)
+    with pytest.raises(RecordError, match="NPTS=101, more than 100"):
+        rb.load_record(at2)
+    with pytest.raises(ParameterError, match="acc.*at most 100 samples"):
+        Record.from_samples(np.zeros(101), 0.01)
+    with pytest.raises(ParameterError, match="time.*at most 100 samples"):
+        Record(np.arange(101.0), np.zeros(101))

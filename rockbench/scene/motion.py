@@ -22,6 +22,7 @@ import abc
 import bisect
 import math
 import os
+import re
 from typing import Any
 
 import numpy as np
@@ -36,14 +37,36 @@ __all__ = [
     "RickerPulse",
     "Record",
     "UNIT_FACTORS",
+    "UNIT_SPELLINGS",
+    "parse_units",
+    "unit_factor",
     "antisymmetric_beta",
     "make_pulse",
     "motion_from_spec",
 ]
 
-#: Factor [m/s^2 per unit] converting accelerations in the given units to m/s^2.
-#: Units of g use :data:`rockbench.constants.G_STANDARD` so that published PGAs are reproduced.
-UNIT_FACTORS: dict[str, float] = {"g": G_STANDARD, "m/s2": 1.0, "cm/s2": 0.01}
+#: Factor [m/s^2 per unit] converting accelerations in the given units to m/s^2, by canonical
+#: name (:func:`parse_units` maps every accepted spelling to one of these). Units of g use
+#: :data:`rockbench.constants.G_STANDARD` so that published PGAs are reproduced; 1 gal = 1 cm/s^2;
+#: 1 in = 0.0254 m and 1 ft = 0.3048 m exactly.
+UNIT_FACTORS: dict[str, float] = {"g": G_STANDARD, "m/s2": 1.0, "cm/s2": 0.01, "mm/s2": 0.001,
+                                  "in/s2": 0.0254, "ft/s2": 0.3048}
+
+#: Spellings of a length in an acceleration unit, by canonical length.
+_LENGTHS = {"m": ("m", "meter", "meters", "metre", "metres"),
+            "cm": ("cm", "centimeter", "centimeters", "centimetre", "centimetres"),
+            "mm": ("mm", "millimeter", "millimeters", "millimetre", "millimetres"),
+            "in": ("in", "inch", "inches"),
+            "ft": ("ft", "foot", "feet")}
+_LENGTH_OF = {w: k for k, ws in _LENGTHS.items() for w in ws}
+_SECOND = r"(?:s|sec|secs|second|seconds)"
+#: "<length>" + per second squared: /s^2, /s**2, /s2, /s/s, /sec2, /sec/sec, s^-2, s-2 (with
+#: an optional separator ' ', '.', '*' before s^-2); the unit already lower-cased and stripped.
+_PER_S2 = re.compile(rf"^([a-z]+)\s*(?:/\s*{_SECOND}\s*(?:\^|\*\*)?\s*2|/\s*{_SECOND}\s*/\s*"
+                     rf"{_SECOND}|/\s*\(\s*{_SECOND}\s*(?:\^|\*\*)?\s*2\s*\)|"
+                     rf"\s*[.*]?\s*{_SECOND}\s*(?:\^|\*\*)?\s*-\s*2)$")
+_G_WORDS = ("g", "gs", "g's", "g-units", "g units")
+_GAL_WORDS = ("gal", "gals", "galileo", "galileos")
 
 #: Ricker pulse shapes of Eq. (29) ("symmetric") and Eq. (30) ("antisymmetric").
 PULSE_SHAPES = ("symmetric", "antisymmetric")
@@ -54,16 +77,46 @@ _KNOTS_PER_PERIOD = 400
 #: A pulse run starts at t = -_HALF_WINDOW T_g and its excitation ends at +_HALF_WINDOW T_g.
 _HALF_WINDOW = 3.0
 
+#: The accepted spellings, as the errors list them (case-insensitive; sec/second for s, the
+#: length spelled out, ^2, **2, 2, /s/s and s^-2 are all accepted).
+UNIT_SPELLINGS = ("g", "gal", "m/s^2", "cm/s^2", "mm/s^2", "in/s^2", "ft/s^2", "CM/S/S",
+                  "cm/sec2", "cm/sec/sec", "cm s^-2", "m/s2", "cm/s2")
+
+
+def parse_units(text: Any, name: str = "units") -> str:
+    """The canonical name (a key of :data:`UNIT_FACTORS`) of an acceleration unit written
+    ``text``, as record headers and agencies write it: ``g``/``G``, ``gal``, ``cm/s^2``,
+    ``CM/S/S``, ``cm/sec2``, ``cm/sec**2``, ``cm s^-2``, ``m/s^2``, ``mm/s^2``, ``in/s^2``
+    (inch), ``ft/s^2``, ... (case-insensitive, surrounding brackets and blanks ignored).
+
+    Raises :class:`ParameterError` naming ``name``, the text and the accepted spellings for
+    anything else (a unit that is not an acceleration, a typo, a non-string).
+    """
+    if isinstance(text, str):
+        t = text.strip().lower().replace("\u00b2", "2")
+        while len(t) > 1 and t[0] + t[-1] in ("()", "[]", "{}"):
+            t = t[1:-1].strip()
+        if t in UNIT_FACTORS:
+            return t
+        if t in _G_WORDS:
+            return "g"
+        if t in _GAL_WORDS:
+            return "cm/s2"
+        m = _PER_S2.match(t)
+        if m is not None and m.group(1) in _LENGTH_OF:
+            return f"{_LENGTH_OF[m.group(1)]}/s2"
+    raise ParameterError(name, text, "an acceleration unit: " + ", ".join(UNIT_SPELLINGS),
+                         "case-insensitive; sec or second for s, 2, ^2, **2, /s/s or s^-2 for "
+                         "the square")
+
 
 def unit_factor(units: str, name: str = "units") -> float:
-    """Factor converting accelerations in ``units`` (one of :data:`UNIT_FACTORS`) to m/s^2.
+    """Factor converting accelerations in ``units`` (any spelling :func:`parse_units`
+    accepts) to m/s^2.
 
     Raises :class:`ParameterError` naming ``name`` for any other value.
     """
-    try:
-        return UNIT_FACTORS[units]
-    except (KeyError, TypeError):
-        raise ParameterError(name, units, f"one of {', '.join(map(repr, UNIT_FACTORS))}") from None
+    return UNIT_FACTORS[parse_units(units, name)]
 
 
 def _check_factor(factor: Any) -> float:
@@ -319,9 +372,9 @@ class RickerPulse(GroundMotion):
     # --- GroundMotion interface ------------------------------------------------------------
     def acceleration(self, t):
         """u_g''(t) [m/s^2] by Eq. (29) or (30); ``t`` [s] float or array."""
-        if isinstance(t, (float, int)):
+        if isinstance(t, (float, int)) and not isinstance(t, bool):
             return self._scale * self._wavelet(t / self._period, math.exp)
-        t = np.asarray(t, dtype=float)
+        t = _times(t)
         out = self._scale * self._wavelet(t / self._period)
         return float(out) if out.ndim == 0 else out
 
@@ -463,11 +516,17 @@ class Record(GroundMotion):
     source : str
         Where the data came from (e.g. the file header).
     units_in : str
-        Units of the original data, one of :data:`UNIT_FACTORS` (metadata only).
+        Units of the original data, any spelling of :func:`parse_units` (metadata only; kept
+        as its canonical name, a key of :data:`UNIT_FACTORS`).
+
+    At most ``record_samples`` samples (limit of :mod:`rockbench.limits`, 2e6 unless
+    ``ROCKBENCH_RECORD_SAMPLES`` raises it), checked before any array is built.
     """
 
     def __init__(self, time: Any, acceleration: Any, name: str = "", source: str = "",
                  units_in: str = "m/s2"):
+        _check_samples("time", time)
+        _check_samples("acceleration", acceleration)
         t = _finite_vector("time", time)
         a = _finite_vector("acceleration", acceleration)
         if t.size < 2:
@@ -480,7 +539,7 @@ class Record(GroundMotion):
             i = int(np.argmin(steps > 0))
             where = f"time[{i + 1}]={float(t[i + 1])!r} after time[{i}]={float(t[i])!r}"
             raise ParameterError("time", where, "strictly increasing")
-        unit_factor(units_in, "units_in")
+        units_in = parse_units(units_in, "units_in")
         t.setflags(write=False)
         a.setflags(write=False)
         self._time, self._acc = t, a
@@ -494,12 +553,15 @@ class Record(GroundMotion):
     @classmethod
     def from_samples(cls, acc: Any, dt: float, t0: float = 0.0, units: str = "m/s2",
                      name: str = "", source: str = "") -> Record:
-        """Record from equally spaced samples ``acc`` in ``units`` ("g", "m/s2" or "cm/s2"; g is
+        """Record from equally spaced samples ``acc`` in ``units`` (any spelling of
+        :func:`parse_units`: "g", "gal", "m/s^2", "cm/s/s", ...; g is
         :data:`rockbench.constants.G_STANDARD`), time step ``dt`` > 0 [s], first sample at ``t0``
-        [s]."""
+        [s]. At most ``record_samples`` samples (:mod:`rockbench.limits`)."""
         dt = check_positive("dt", dt)
         t0 = check_finite("t0", t0)
-        factor = unit_factor(units)
+        units = parse_units(units)
+        factor = UNIT_FACTORS[units]
+        _check_samples("acc", acc)
         a = _finite_vector("acceleration", acc) * factor
         record = cls(t0 + dt * np.arange(a.size), a, name=name, source=source, units_in=units)
         record._nominal_dt = dt
@@ -548,7 +610,7 @@ class Record(GroundMotion):
     def acceleration(self, t):
         """Linear interpolation of the samples [m/s^2] at ``t`` [s]; exactly 0 outside
         [t_start, t_end]."""
-        if isinstance(t, (float, int)):
+        if isinstance(t, (float, int)) and not isinstance(t, bool):
             ts = self._time_list
             if not ts[0] <= t <= ts[-1]:
                 return 0.0
@@ -557,7 +619,7 @@ class Record(GroundMotion):
                 return float(self._acc[-1])
             w = (t - ts[i]) / (ts[i + 1] - ts[i])
             return float((1.0 - w) * self._acc[i] + w * self._acc[i + 1])
-        t = np.asarray(t, dtype=float)
+        t = _times(t)
         out = np.interp(t, self._time, self._acc, left=0.0, right=0.0)
         return float(out) if out.ndim == 0 else out
 
@@ -623,3 +685,26 @@ def _finite_vector(name: str, values: Any) -> np.ndarray:
 def _short(values: Any) -> str:
     text = repr(values)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _times(t: Any) -> np.ndarray:
+    """``t`` [s] (a number or an array of numbers) as a float array; ParameterError naming
+    ``t`` for anything else (a string, None, a bool)."""
+    try:
+        if t is None or isinstance(t, (bool, np.bool_, str, bytes)):
+            raise TypeError
+        return np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError("t", _short(t), "a time [s] or an array of times") from None
+
+
+def _check_samples(name: str, values: Any) -> None:
+    """ParameterError naming ``name`` if ``values`` holds more samples than the limit
+    ``record_samples`` (:mod:`rockbench.limits`), checked from its length before any copy."""
+    from ..limits import check_count
+
+    try:
+        n = len(values)
+    except TypeError:
+        return                 # a scalar or an iterator: _finite_vector names it
+    check_count("record_samples", name, n, "samples")

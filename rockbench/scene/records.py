@@ -29,6 +29,7 @@ import csv
 import math
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -36,7 +37,7 @@ import numpy as np
 
 from ..errors import ParameterError, RecordError, check_finite, check_positive
 from ..limits import check_in_limit, limit, override_hint
-from .motion import Record, unit_factor
+from .motion import UNIT_SPELLINGS, Record, parse_units
 
 __all__ = ["load_at2", "load_columns", "load_record", "find_records", "listed_metadata"]
 
@@ -46,47 +47,65 @@ _NPTS_KEY = re.compile(r"\bNPTS\s*=\s*(\d+)", re.IGNORECASE)
 _DT_KEY = re.compile(rf"\bDT\s*=\s*({_NUMBER})", re.IGNORECASE)
 #: NGA-West2: "  4000    0.0100    NPTS, DT ..."
 _NGA_LINE = re.compile(rf"^\s*(\d+)\s*,?\s+({_NUMBER})\s+NPTS\s*,\s*DT\b", re.IGNORECASE)
-_UNITS = re.compile(r"\bUNITS\s+OF\s+([A-Za-z][A-Za-z/^0-9*]*)", re.IGNORECASE)
 
 
-def load_at2(path: str | os.PathLike, *, name: str | None = None) -> Record:
-    """Read a PEER AT2 file (accelerations in g) into a :class:`Record` in m/s^2.
+def load_at2(path: str | os.PathLike, *, name: str | None = None,
+             units: str | None = None) -> Record:
+    """Read a PEER AT2 file into a :class:`Record` in m/s^2.
 
-    The sample times are ``k * DT``, k = 0..NPTS-1 [s]. ``name`` defaults to the file stem;
+    The header (the lines up to the one with NPTS and DT, at most :data:`HEADER_LINES`) must
+    state the units of the accelerations (``ACCELERATION TIME HISTORY IN UNITS OF G``,
+    ``UNITS: CM/S^2``, ``UNITS = gal``, ``ACCELERATION IN CM/S/S``, ...: every spelling of
+    :func:`~rockbench.scene.motion.parse_units`); a unit it does not know is refused with a
+    :class:`RecordError` naming it and listing the accepted spellings. A header that states no
+    units takes ``units`` (required then); a header that states them must agree with
+    ``units`` if it is given. The sample times are ``k * DT``, k = 0..NPTS-1 [s]; NPTS is
+    checked against the limit ``record_samples`` before any value is read, and the values are
+    parsed in blocks (memory bounded by NPTS). ``name`` defaults to the file stem;
     ``source`` holds the header lines joined with " | ".
     """
-    path, lines = _read_lines(path)
-    for k, line in enumerate(lines):
-        header = _match_npts_dt(line)
-        if header is not None:
-            break
-    else:
-        raise RecordError(f"record file {path}: no header line with NPTS and DT "
-                          "(is it a PEER AT2 file?)")
-    npts, dt_text = header
-    dt = _to_float(dt_text)
-    if not (math.isfinite(dt) and dt > 0.0):
-        raise RecordError(f"record file {path}, line {k + 1}: DT={dt_text} must be > 0 [s]")
-    head = [h.strip() for h in lines[: k + 1]]
-    units = _UNITS.search(" ".join(head))
-    if units is not None and units.group(1).upper() != "G":
-        raise RecordError(f"record file {path}: units {units.group(1)!r} in the header; "
-                          "AT2 files must be in units of G")
-    values = _parse_values(path, lines, k + 1)
-    if values.size != npts:
-        raise RecordError(f"record file {path}: header line {k + 1} says NPTS={npts} "
-                          f"but {values.size} values follow")
-    _check_enough(path, values)
-    return Record.from_samples(values, dt, units="g", name=path.stem if name is None else name,
-                               source=" | ".join(h for h in head if h))
+    path = _check_path(path)
+    with _open_record(path) as f:
+        head, npts, dt_text = _read_header(path, f)
+        k = len(head)
+        dt = _to_float(dt_text)
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise RecordError(f"record file {path}, line {k}: DT={dt_text} must be > 0 [s]")
+        stated = _header_units(path, head)
+        if units is not None:
+            given = parse_units(units, "record-units")
+            if stated is not None and given != stated[0]:
+                raise ParameterError("record-units", units,
+                                     f"omitted or the header's units ({stated[1]!r})",
+                                     f"{path.name} states its units")
+            stated = stated or (given, units)
+        if stated is None:
+            raise RecordError(f"record file {path}: the header (lines 1-{k}) states no units of "
+                              "acceleration (such as 'UNITS OF G' or 'UNITS: CM/S^2'); give "
+                              "them with --record-units (units=)")
+        _, most = limit("record_samples")
+        if npts > most:
+            raise RecordError(f"record file {path}: header line {k} says NPTS={npts}, more than "
+                              f"{most:g} samples ({override_hint('record_samples')})")
+        scan = _scan(path, f, k + 1, keep=npts)
+    if scan.total != npts:
+        raise RecordError(f"record file {path}: header line {k} says NPTS={npts} "
+                          f"but {scan.total} values follow")
+    _check_enough(path, scan.values)
+    lines = [h.strip() for h in head]
+    return Record.from_samples(scan.values, dt, units=stated[0],
+                               name=path.stem if name is None else str(name),
+                               source=" | ".join(h for h in lines if h))
 
 
 def load_columns(path: str | os.PathLike, *, dt: float, units: str, t0: float = 0.0,
                  name: str | None = None) -> Record:
     """Read a headerless file of whitespace-separated samples (any number per line, read
-    row-major) with time step ``dt`` > 0 [s], first sample at ``t0`` [s], in ``units``
-    ("g", "m/s2" or "cm/s2"). Blank lines and lines starting with ``#`` are skipped.
-    ``name`` defaults to the file stem.
+    row-major) with time step ``dt`` > 0 [s], first sample at ``t0`` [s], in ``units`` (any
+    spelling of :func:`~rockbench.scene.motion.parse_units`: "g", "gal", "m/s^2", "cm/s2",
+    "CM/S/S", ...). Blank lines and lines starting with ``#`` are skipped. ``name`` defaults
+    to the file stem. The file is parsed in blocks and refused as soon as it holds more values
+    than the limit ``record_samples`` (:mod:`rockbench.limits`).
 
     A file of exactly two numbers on every line (at least 3 lines) whose first column looks
     like time is a ``t a`` file: first column times [s], second accelerations. Its times must
@@ -97,22 +116,27 @@ def load_columns(path: str | os.PathLike, *, dt: float, units: str, t0: float = 
     sorted, has equal non-zero steps (shuffled times), or is non-negative and mostly (80 %)
     increasing.
     """
+    path = _check_path(path)
     dt = check_positive("dt", dt)
     t0 = check_finite("t0", t0)
-    unit_factor(units)
-    path, lines = _read_lines(path)
-    rows = _parse_rows(path, lines, 0)
-    timed = _time_column(path, rows, dt)
+    units = parse_units(units)
+    name = path.stem if name is None else str(name)
+    with _open_record(path) as f:
+        scan = _scan(path, f, 1, keep=None, rows=True)
+    if scan.blank:
+        raise RecordError(f"record file {path} is empty")
+    _, most = limit("record_samples")
+    timed = _time_column(path, scan, dt)
     if timed is not None:
         times, acc = timed
-        return Record.from_samples(acc, dt, t0=float(times[0]), units=units,
-                                   name=path.stem if name is None else name,
+        return Record.from_samples(acc, dt, t0=float(times[0]), units=units, name=name,
                                    source=f"{path.name} (t a columns, dt={dt:g} s, "
                                           f"units={units})")
-    values = np.array([v for _, row in rows for v in row], dtype=float)
-    _check_enough(path, values)
-    return Record.from_samples(values, dt, t0=t0, units=units,
-                               name=path.stem if name is None else name,
+    if scan.total > most:
+        raise RecordError(f"record file {path} holds {scan.total} values, more than {most:g} "
+                          f"samples ({override_hint('record_samples')})")
+    _check_enough(path, scan.values)
+    return Record.from_samples(scan.values, dt, t0=t0, units=units, name=name,
                                source=f"{path.name} (dt={dt:g} s, units={units})")
 
 
@@ -127,24 +151,25 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
 
     Errors name the command-line options: ``record-dt``, ``record-units``, ``record-scale``.
     For an AT2 file, ``dt`` and ``units`` may be omitted; if given they must agree with the file
-    (DT of the header, units of g). The time step (given or from the header) must be in
-    (1e-4, 0.1) s (limit ``record_dt`` of :mod:`rockbench.limits`, env
+    (DT of the header; the units its header states, in any spelling of
+    :func:`~rockbench.scene.motion.parse_units`). The time step (given or from the header) must
+    be in (1e-4, 0.1) s (limit ``record_dt`` of :mod:`rockbench.limits`, env
     ``ROCKBENCH_RECORD_DT``).
     """
+    path = _check_path(path)
     scale = check_finite("record-scale", scale)
     if scale == 0.0:
         raise ParameterError("record-scale", scale, "a finite, non-zero real number")
-    path = Path(path)
+    if dt is not None:
+        check_positive("record-dt", dt)
+    if units is not None:
+        parse_units(units, "record-units")
     if path.suffix.lower() == ".at2":
-        record = load_at2(path)
-        if dt is not None and not math.isclose(check_positive("record-dt", dt), record.dt,
-                                                rel_tol=1e-9):
+        record = load_at2(path, units=units)
+        if dt is not None and not math.isclose(float(dt), record.dt, rel_tol=1e-9):
             raise ParameterError("record-dt", dt,
                                  f"omitted or equal to the file's DT = {record.dt:g} s",
                                  f"{path.name} gives its own time step")
-        if units is not None and units != "g":
-            raise ParameterError("record-units", units, "omitted or 'g'",
-                                 f"AT2 file {path.name} is in units of g")
         check_in_limit("record_dt", f"DT of {path.name}", record.dt)
     else:
         listed = listed_metadata(path) if (dt is None or units is None) else None
@@ -155,23 +180,25 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
             raise ParameterError("record-dt", None, "> 0 [s]",
                                  f"required for the headerless record file {path.name}")
         if units is None:
-            raise ParameterError("record-units", None, "one of 'g', 'm/s2', 'cm/s2'",
+            raise ParameterError("record-units", None, "an acceleration unit: "
+                                 + ", ".join(UNIT_SPELLINGS),
                                  f"required for the headerless record file {path.name}")
         dt = check_in_limit("record_dt", "record-dt", dt)
-        unit_factor(units, "record-units")
-        record = load_columns(path, dt=dt, units=units)
+        record = load_columns(path, dt=dt, units=parse_units(units, "record-units"))
     return record if scale == 1.0 else record.scaled(scale)
 
 
-_UNIT_WORDS = (("cm/s", "cm/s2"), ("m/s", "m/s2"), ("g", "g"))
-
-
-def _units_of(text: Any) -> str:
-    t = str(text or "").strip().lower()
-    for key, units in _UNIT_WORDS:
-        if t.startswith(key):
-            return units
-    return "cm/s2"
+def _units_of(text: Any, where: str) -> str:
+    """Canonical units of a ``records.csv`` cell (its first words, e.g. "cm/s^2 (already
+    scaled)"); cm/s^2 for an empty cell; RecordError naming ``where`` for an unknown unit."""
+    t = str(text or "").strip()
+    if not t:
+        return "cm/s2"
+    found = _leading_units(t)
+    if found is None:
+        raise RecordError(f"{where}: units {t.split()[0]!r} are not an acceleration unit "
+                          f"(accepted: {', '.join(UNIT_SPELLINGS)})")
+    return found[0]
 
 
 def _read_listing(csv_path: Path) -> dict[str, dict[str, Any]]:
@@ -198,7 +225,8 @@ def _read_listing(csv_path: Path) -> dict[str, dict[str, Any]]:
             raise RecordError(f"{csv_path}: record {r.get(name_col)!r} has dt "
                               f"{r.get(dt_col)!r}, not a number") from None
         out[str(r[name_col]).strip()] = {
-            "dt": dt, "units": _units_of(r[unit_col]) if unit_col else "cm/s2"}
+            "dt": dt, "units": _units_of(r[unit_col], f"{csv_path}: record "
+                                             f"{r.get(name_col)!r}") if unit_col else "cm/s2"}
     return out
 
 
@@ -206,7 +234,7 @@ def listed_metadata(path: str | os.PathLike) -> dict[str, Any] | None:
     """dt [s] and units of a headerless record file from the ``records.csv`` beside it
     (columns ``record`` = file stem, ``dt_s`` or ``dt``, ``units``), or None if it is not
     listed there."""
-    p = Path(path)
+    p = _check_path(path)
     listing = p.parent / "records.csv"
     if not listing.is_file():
         return None
@@ -222,7 +250,7 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
     Returns (records, notes): each record a dict name, path, dt [s] or None, units or None;
     notes say which files were skipped and why.
     """
-    root = Path(records_dir)
+    root = _check_path(records_dir, "records_dir")
     if not root.is_dir():
         raise ParameterError("records_dir", str(records_dir), "an existing folder of record "
                                                               "files (.AT2, or files listed "
@@ -252,9 +280,30 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
 
 
 # ------------------------------------------------------------------------------------------------
-def _read_lines(path: str | os.PathLike) -> tuple[Path, list[str]]:
-    """The file's lines; RecordError naming the file if it cannot be read or is empty."""
-    path = Path(path)
+#: At most this many lines (each at most :data:`_HEADER_LINE_BYTES`) are searched for an AT2
+#: header line with NPTS and DT (PEER's headers have 4).
+HEADER_LINES = 100
+_HEADER_LINE_BYTES = 1 << 16
+#: Bytes read and parsed at a time (the memory of parsing is this plus the samples kept).
+_BLOCK = 1 << 18
+_FORTRAN = str.maketrans("Dd", "Ee")
+#: A units statement in a header: "UNITS OF G", "UNITS: CM/S^2", "UNIT = gal", "units are g".
+_UNITS_KEY = re.compile(r"\bUNITS?\b\s*(?:(?:OF|IN|ARE|IS)\b|[:=])?\s*[:=]?\s*", re.IGNORECASE)
+#: Without the word UNITS: "ACCELERATION IN CM/S/S", "ACCELERATION (G)".
+_ACCEL_IN = re.compile(r"\bACCEL\w*\b(?:[^,;(]*?\bIN\s+|\s*(?=[(\[]))", re.IGNORECASE)
+
+
+def _check_path(path: Any, name: str = "path") -> Path:
+    """``path`` as a Path; ParameterError naming ``name`` unless it is a str or os.PathLike."""
+    if isinstance(path, (str, os.PathLike)) and str(path).strip():
+        return Path(path)
+    shown = repr(path) if len(repr(path)) <= 60 else repr(path)[:57] + "..."
+    raise ParameterError(name, shown, "the path of a record file (a str or os.PathLike)")
+
+
+def _open_record(path: Path):
+    """The file opened for binary reading, after the checks that need no reading: it exists, is
+    a regular file, and has at most ``record_bytes`` bytes (:mod:`rockbench.limits`)."""
     try:
         if path.exists() and not path.is_file():
             raise RecordError(f"record file {path} is not a regular file")
@@ -266,14 +315,82 @@ def _read_lines(path: str | os.PathLike) -> tuple[Path, list[str]]:
         raise RecordError(f"record file {path} has {size} bytes, more than {max_bytes:g} "
                           f"({override_hint('record_bytes')})")
     try:
-        text = path.read_text(encoding="ascii", errors="strict")
-    except UnicodeDecodeError as exc:
-        raise RecordError(f"record file {path}: not plain ASCII text (byte {exc.start})") from None
+        return open(path, "rb")
     except OSError as exc:
         raise RecordError(f"cannot read record file {path}: {exc.strerror or exc}") from None
-    if not text.strip():
+
+
+def _ascii(path: Path, data: bytes, offset: int) -> str:
+    try:
+        return data.decode("ascii")
+    except UnicodeDecodeError as exc:
+        raise RecordError(f"record file {path}: not plain ASCII text (byte {offset + exc.start})"
+                          ) from None
+
+
+def _read_header(path: Path, f) -> tuple[list[str], int, str]:
+    """(header lines up to and including the NPTS/DT line, NPTS, DT text), reading at most
+    :data:`HEADER_LINES` lines; RecordError naming the file otherwise."""
+    head: list[str] = []
+    offset = 0
+    while len(head) < HEADER_LINES:
+        raw = f.readline(_HEADER_LINE_BYTES)
+        if not raw:
+            break
+        line = _ascii(path, raw, offset)
+        offset += len(raw)
+        head.append(line.rstrip("\r\n"))
+        found = _match_npts_dt(line)
+        if found is not None:
+            return head, found[0], found[1]
+    if not any(h.strip() for h in head):
         raise RecordError(f"record file {path} is empty")
-    return path, text.splitlines()
+    raise RecordError(f"record file {path}: no header line with NPTS and DT in its first "
+                      f"{len(head)} lines (is it a PEER AT2 file?)")
+
+
+def _leading_units(text: str) -> tuple[str, str] | None:
+    """(canonical units, as written) of the unit at the start of ``text`` (up to 5 words, the
+    longest that is a unit; trailing punctuation ignored), or None."""
+    words = text.split()[:5]
+    for n in range(len(words), 0, -1):
+        cand = " ".join(words[:n]).rstrip(".,;:")
+        try:
+            return parse_units(cand), cand
+        except ParameterError:
+            continue
+    return None
+
+
+def _header_units(path: Path, head: list[str]) -> tuple[str, str] | None:
+    """(canonical units, as written) that the header lines state, None if they state none;
+    RecordError for a statement whose unit is unknown or two statements that disagree."""
+    found: list[tuple[str, str]] = []
+    for line in head:
+        for key in (_UNITS_KEY, _ACCEL_IN):
+            for m in key.finditer(line):
+                rest = line[m.end():]
+                if not rest.strip():
+                    continue
+                u = _leading_units(rest)
+                if u is None:
+                    word = rest.split()[0].rstrip(".,;:")
+                    if key is _ACCEL_IN and not any(c in word for c in "/^()[]"):
+                        continue          # "ACCELERATION IN THE N-S DIRECTION": no unit
+                    raise RecordError(
+                        f"record file {path}: the header's units {word!r} ({line.strip()!r}) "
+                        f"are not an acceleration unit rockbench knows; accepted (any case): "
+                        f"{', '.join(UNIT_SPELLINGS)}")
+                found.append(u)
+            if found and key is _UNITS_KEY:
+                break
+    if not found:
+        return None
+    if len({c for c, _ in found}) > 1:
+        raise RecordError(f"record file {path}: the header states two units, "
+                          f"{found[0][1]!r} and "
+                          f"{next(w for c, w in found if c != found[0][0])!r}")
+    return found[0]
 
 
 def _match_npts_dt(line: str) -> tuple[int, str] | None:
@@ -289,48 +406,138 @@ def _match_npts_dt(line: str) -> tuple[int, str] | None:
 
 def _to_float(token: str) -> float:
     """Parse a number, accepting Fortran's D exponent (1.0D-03)."""
-    return float(token.replace("D", "E").replace("d", "e"))
+    return float(token.translate(_FORTRAN))
 
 
-def _parse_values(path: Path, lines: list[str], start: int) -> np.ndarray:
-    """All numbers on ``lines[start:]``, row-major; RecordError naming the file and 1-based line
-    of the first token that is not a finite number."""
-    return np.array([v for _, row in _parse_rows(path, lines, start) for v in row], dtype=float)
+@dataclass
+class _Scan:
+    """What :func:`_scan` read: ``values`` (the first ``keep`` numbers, row-major), ``total``
+    (every number in the file, counted), and, when rows were asked for and every data line
+    held exactly two numbers, ``lines``: the 1-based line number of each data line."""
+
+    values: np.ndarray
+    total: int
+    lines: np.ndarray | None = None
+    blank: bool = False
 
 
-def _parse_rows(path: Path, lines: list[str], start: int) -> list[tuple[int, list[float]]]:
-    """(1-based line number, numbers) of every data line of ``lines[start:]`` (blank lines and
-    ``#`` comments skipped); RecordError naming the file and line of the first token that is
-    not a finite number."""
-    rows: list[tuple[int, list[float]]] = []
-    for k in range(start, len(lines)):
-        line = lines[k].strip()
-        if not line or line.startswith("#"):
+def _scan(path: Path, f, line0: int, *, keep: int | None, rows: bool = False) -> _Scan:
+    """The numbers of the rest of the open file ``f`` (whose next line is line ``line0``),
+    parsed in blocks of :data:`_BLOCK` bytes. ``values`` holds them all while there are at most
+    ``keep`` (None: the limit ``record_samples``; twice it while a ``t a`` file of ``keep``
+    samples is possible); past that they are dropped and only counted (``total``), so memory is
+    bounded whatever the file holds (the caller refuses such a file). Blank lines and lines starting with ``#`` are skipped;
+    RecordError naming the file and the line of the first token that is not a finite number.
+    ``rows``: also track whether every data line holds exactly two numbers (a ``t a`` file)."""
+    most = int(limit("record_samples")[1])
+    if keep is None:
+        keep = most
+    pieces: list[np.ndarray] = []
+    kept = total = 0
+    line = line0               # number of the line the next part starts on
+    offset = f.tell()          # byte offset of the next part
+    carry = b""
+    mid_line = in_comment = False
+    two = rows                 # every data line so far has two numbers
+    line_nos: list[np.ndarray] = []     # per block: the line number of each data line
+    blank = True
+    while True:
+        raw = f.read(_BLOCK)
+        data = carry + raw
+        if raw:
+            cut = data.rfind(b"\n") + 1
+            if cut == 0:      # a line longer than a block: cut it at a blank
+                cut = max(data.rfind(b" "), data.rfind(b"\t"), data.rfind(b"\r")) + 1
+                if cut == 0:
+                    if len(data) > 4 * _BLOCK:
+                        raise RecordError(f"record file {path}, line {line}: a token of more "
+                                          f"than {len(data)} characters is not a number")
+                    carry = data
+                    continue
+            part, carry = data[:cut], data[cut:]
+        else:
+            part, carry = data, b""
+        text = _ascii(path, part, offset)
+        offset += len(part)
+        if "\r" in text:
+            text = text.replace("\r\n", "\n").replace("\r", "\n")
+        ends_mid = bool(raw) and not text.endswith("\n")
+        blank = blank and not text.strip()
+        if "#" in text or mid_line or two:
+            kept_lines, numbers = [], []
+            lines = text.split("\n")
+            for i, ln in enumerate(lines):
+                if i == 0 and mid_line:
+                    comment = in_comment
+                    two = False
+                else:
+                    comment = ln.lstrip().startswith("#")
+                if not comment:
+                    kept_lines.append(ln)
+                    if two and ln.strip():
+                        if len(ln.split()) == 2:
+                            numbers.append(line + i)
+                        else:
+                            two = False
+            line_nos = line_nos + [np.array(numbers, dtype=np.int64)] if two else []
+            in_comment = ends_mid and comment
+            body = "\n".join(kept_lines)
+        else:
+            body = text
+        mid_line = ends_mid
+        # values beyond ``keep`` (twice it while the file may be a t a file) are only counted:
+        # the caller refuses the file, and what was kept is dropped
+        if total <= (2 * keep if two else keep):
+            tokens = body.translate(_FORTRAN).split()
+            try:
+                arr = np.array(tokens, dtype=float)
+            except ValueError:
+                arr = None
+            if arr is None or not np.isfinite(arr).all():
+                _bad_token(path, text, line)
+            n = arr.size
+            pieces.append(arr)
+            kept += n
+        else:
+            n = len(body.split())
+        total += n
+        if total > (2 * keep if two else keep):
+            pieces, kept, line_nos = [], 0, []
+        line += text.count("\n")
+        if not raw:
+            break
+    values = np.concatenate(pieces) if pieces else np.zeros(0)
+    lines = np.concatenate(line_nos) if two and rows and line_nos else None
+    return _Scan(values, total, lines, blank)
+
+
+def _bad_token(path: Path, text: str, line0: int) -> None:
+    """Raise the RecordError for the first token of ``text`` (starting on line ``line0``) that
+    is not a finite number, naming the file, the line and the token."""
+    for i, ln in enumerate(text.split("\n")):
+        if ln.lstrip().startswith("#"):
             continue
-        row = []
-        for token in line.split():
+        for token in ln.split():
             try:
                 x = _to_float(token)
             except ValueError:
-                raise RecordError(f"record file {path}, line {k + 1}: {token!r} is not a number"
-                                  ) from None
+                raise RecordError(f"record file {path}, line {line0 + i}: {token!r} is not a "
+                                  "number") from None
             if not math.isfinite(x):
-                raise RecordError(f"record file {path}, line {k + 1}: value {token!r} is not "
-                                  "finite")
-            row.append(x)
-        rows.append((k + 1, row))
-    return rows
+                raise RecordError(f"record file {path}, line {line0 + i}: value {token!r} is "
+                                  "not finite")
+    raise RecordError(f"record file {path}: a value near line {line0} is not a finite number")
 
 
-def _time_column(path: Path, rows: list[tuple[int, list[float]]], dt: float
-                 ) -> tuple[np.ndarray, np.ndarray] | None:
+def _time_column(path: Path, scan: _Scan, dt: float) -> tuple[np.ndarray, np.ndarray] | None:
     """(times, accelerations) of a ``t a`` file, None for a file of samples; RecordError if
     the first column looks like time but is not strictly increasing, uniform, or spaced by
     ``dt`` [s] (rules: :func:`load_columns`)."""
-    if len(rows) < 3 or any(len(r) != 2 for _, r in rows):
+    if scan.lines is None or scan.lines.size < 3 or scan.total != scan.values.size:
         return None
-    t = np.array([r[0] for _, r in rows])
-    a = np.array([r[1] for _, r in rows])
+    lines = scan.lines
+    t = scan.values[0::2]
+    a = scan.values[1::2]
     steps = np.diff(t)
     span = float(t[-1] - t[0])
     increasing = bool(np.all(steps > 0))
@@ -344,18 +551,22 @@ def _time_column(path: Path, rows: list[tuple[int, list[float]]], dt: float
         np.all(np.abs(steps - med) <= 0.5 * med))
     if not (nearly_regular or uniform_when_sorted or mostly_up):
         return None
+    _, most = limit("record_samples")
+    if t.size > most:
+        raise RecordError(f"record file {path} holds {t.size} samples (t a lines), more than "
+                          f"{most:g} ({override_hint('record_samples')})")
     what = f"record file {path}: two columns read as time [s] and acceleration"
     if not increasing:
         i = int(np.argmin(steps > 0))
-        raise RecordError(f"{what}, but the time on line {rows[i + 1][0]} ({t[i + 1]:g}) is not "
-                          f"after the time on line {rows[i][0]} ({t[i]:g}): times must "
+        raise RecordError(f"{what}, but the time on line {lines[i + 1]} ({t[i + 1]:g}) is not "
+                          f"after the time on line {lines[i]} ({t[i]:g}): times must "
                           "increase (for samples only, write another number of values per "
                           "line)")
     step = span / (len(t) - 1)
     off = np.abs(t - (t[0] + step * np.arange(len(t))))
     i = int(np.argmax(off))
     if off[i] > 0.01 * step:
-        raise RecordError(f"{what}, but the times are not uniformly spaced: line {rows[i][0]} "
+        raise RecordError(f"{what}, but the times are not uniformly spaced: line {lines[i]} "
                           f"has t = {t[i]:g}, {off[i]:.3g} s off the grid of step {step:g} s")
     if not math.isclose(step, dt, rel_tol=1e-3):
         raise RecordError(f"{what}, but the time step of the file ({step:g} s) differs from "

@@ -187,12 +187,134 @@ def test_at2_errors_name_the_file(tmp_path, npts, values, header_line, message):
     assert str(path) in str(info.value)
 
 
-def test_at2_in_other_units_is_refused(tmp_path):
-    text = OLD_HEADER.replace("UNITS OF G.", "UNITS OF CM/SEC/SEC.") + "NPTS= 2, DT= .01\n1 2\n"
-    path = write(tmp_path, "cm.AT2", text)
-    with pytest.raises(RecordError, match="CM/SEC/SEC") as info:
+#: (units as a header writes them, m/s^2 per unit): PEER's "UNITS OF G", the issue's
+#: "UNITS: CM/S^2" (was read as g: 294 g), and other agencies' spellings.
+HEADER_UNITS = [
+    ("ACCELERATION TIME HISTORY IN UNITS OF G. FILTER POINTS: HP=0.1 Hz", G_STANDARD),
+    ("ACCELERATION TIME SERIES IN UNITS OF G", G_STANDARD),
+    ("ACCELERATION TIME HISTORY IN UNITS OF G,  PGA=   .37043 G, PGV=   80.3737 CM/SEC",
+     G_STANDARD),
+    ("UNITS: CM/S^2", 0.01),
+    ("ACCELERATION TIME HISTORY IN UNITS OF CM/SEC/SEC.", 0.01),
+    ("Units: cm/s/s", 0.01),
+    ("UNITS = gal", 0.01),
+    ("ACCELERATION IN CM/SEC2, PGA= 306.8", 0.01),
+    ("acceleration (cm/s**2)", 0.01),
+    ("UNITS OF m/s^2", 1.0),
+    ("units: mm/s^2", 0.001),
+    ("UNITS: IN/S^2", 0.0254),
+    ("UNITS: cm s^-2", 0.01),
+]
+
+
+@pytest.mark.parametrize("line, factor", HEADER_UNITS)
+def test_at2_header_units_are_read_and_converted(tmp_path, line, factor):
+    """The header's units are recognised in the spellings PEER and other agencies use, and the
+    samples converted to m/s^2 (issue 22: "UNITS: CM/S^2" was read as g and a block under a
+    0.3 g record overturned under 294 g)."""
+    text = ("SOME AGENCY\nSTATION X\n" + line + "\nNPTS= 3, DT= .0100 SEC\n1.5 -2.0 0.25\n")
+    r = load_record(write(tmp_path, "u.AT2", text))
+    np.testing.assert_allclose(r.samples, np.array([1.5, -2.0, 0.25]) * factor, rtol=1e-15)
+
+
+def test_at2_in_cm_s2_gives_the_pga_written_in_cm_s2(tmp_path):
+    """The issue's case: El Centro 1940 rewritten in cm/s^2 under 'UNITS: CM/S^2' loads to
+    the same record (PGA 3.068 m/s^2), not 100 x 9.81 times it."""
+    src = need(RECORDS / "IV1940_ElCentro_180.AT2")
+    g = load_at2(src)
+    body = "\n".join(" ".join(f"{v * 100:.6f}" for v in g.samples[i:i + 5])
+                     for i in range(0, g.npts, 5))
+    path = write(tmp_path, "cm.AT2", "PEER STRONG MOTION DATABASE RECORD\nIMPERIAL VALLEY\n"
+                 f"UNITS: CM/S^2\nNPTS=  {g.npts}, DT= .01000 SEC\n{body}\n")
+    cm = load_record(path)
+    assert cm.units_in == "cm/s2"
+    assert cm.peak == pytest.approx(g.peak, rel=1e-6)
+    assert cm.peak == pytest.approx(3.068, abs=1e-3)
+
+
+@pytest.mark.parametrize("line, shown", [
+    ("ACCELERATION TIME HISTORY IN UNITS OF CM/SEC. FILTER", "CM/SEC"),
+    ("UNITS: KG", "KG"),
+    ("UNITS OF FURLONGS/FORTNIGHT^2", "FURLONGS/FORTNIGHT^2"),
+    ("UNITS: mgal", "mgal"),
+])
+def test_at2_in_an_unknown_unit_is_refused_naming_it(tmp_path, line, shown):
+    path = write(tmp_path, "x.AT2", f"A\nB\n{line}\nNPTS= 2, DT= .01\n1 2\n")
+    with pytest.raises(RecordError) as info:
         load_at2(path)
-    assert str(path) in str(info.value)
+    msg = str(info.value)
+    assert repr(shown) in msg and str(path) in msg
+    assert "cm/s^2" in msg and "gal" in msg and "CM/S/S" in msg     # the accepted spellings
+
+
+def test_at2_without_units_needs_them_given(tmp_path):
+    path = write(tmp_path, "x.AT2", "A\nB\nC\nNPTS= 2, DT= .01\n1 2\n")
+    with pytest.raises(RecordError, match="states no units"):
+        load_record(path)
+    assert load_record(path, units="gal").samples[1] == pytest.approx(0.02, rel=1e-15)
+    assert load_record(path, units="g").samples[1] == pytest.approx(2 * G_STANDARD, rel=1e-15)
+
+
+def test_at2_units_given_must_agree_with_the_header(tmp_path):
+    path = at2(tmp_path, 2, "1 2\n")                     # UNITS OF G
+    assert load_record(path, units="G").units_in == "g"
+    with pytest.raises(ParameterError, match="record-units"):
+        load_record(path, units="cm/s^2")
+    with pytest.raises(ParameterError, match="record-units"):
+        load_record(path, units="parsecs")
+
+
+def test_two_disagreeing_unit_statements_are_refused(tmp_path):
+    path = write(tmp_path, "x.AT2", "UNITS OF G\nUNITS: CM/S/S\nNPTS= 2, DT= .01\n1 2\n")
+    with pytest.raises(RecordError, match="two units"):
+        load_at2(path)
+
+
+_LENGTH_WORDS = {"cm": 0.01, "centimeters": 0.01, "m": 1.0, "metres": 1.0, "mm": 0.001,
+                 "in": 0.0254, "inches": 0.0254, "ft": 0.3048}
+_SECONDS = ["s", "sec", "second"]
+_SQUARES = ["/{s}^2", "/{s}**2", "/{s}2", "/{s}/{s}", " {s}^-2", ".{s}-2", "/({s}^2)"]
+
+
+@st.composite
+def unit_spellings(draw):
+    """(spelling, m/s^2 per unit or None for an unknown unit) in random case."""
+    kind = draw(st.sampled_from(["length", "g", "gal", "unknown"]))
+    if kind == "length":
+        word = draw(st.sampled_from(sorted(_LENGTH_WORDS)))
+        sec = draw(st.sampled_from(_SECONDS))
+        text, factor = word + draw(st.sampled_from(_SQUARES)).format(s=sec), _LENGTH_WORDS[word]
+    elif kind == "g":
+        text, factor = draw(st.sampled_from(["g", "(g)", "[G]"])), G_STANDARD
+    elif kind == "gal":
+        text, factor = draw(st.sampled_from(["gal", "gals"])), 0.01
+    else:
+        text = draw(st.sampled_from(["cm/s", "m", "kg", "km/h^2", "cm/s^3", "furlong/s^2",
+                                     "mgal", "ug", "N", "cm2/s", "g/s", "percent"]))
+        factor = None
+    case = draw(st.sampled_from([str.lower, str.upper, str.title, lambda x: x]))
+    return case(text), factor
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(unit=unit_spellings(), style=st.sampled_from(["UNITS OF {u}", "UNITS: {u}",
+                                                     "Acceleration in {u}", "units = {u}"]))
+def test_fuzz_header_units(tmp_path, unit, style):
+    """Random spellings of known and unknown units in random header styles: a known unit
+    converts exactly, an unknown one is a RecordError naming it; nothing else happens."""
+    text, factor = unit
+    line = style.format(u=text)
+    path = write(tmp_path, "f.AT2", f"FUZZ\n{line}\nNPTS= 2, DT= .01\n1.0 -3.0\n")
+    if factor is None:
+        with pytest.raises(RecordError) as info:
+            load_at2(path)
+        # named with the accepted spellings, or (a word after "in" that is no unit) no units
+        assert "accepted" in str(info.value) and repr(text) in str(info.value) or (
+            style.startswith("Acc") and "/" not in text and "states no units" in str(info.value))
+    else:
+        r = load_at2(path)
+        np.testing.assert_allclose(r.samples, [factor, -3.0 * factor], rtol=1e-15)
 
 
 @pytest.mark.parametrize("loader", [load_at2, lambda p: load_columns(p, dt=0.01, units="g")])
@@ -230,7 +352,8 @@ def test_columns_bad_token_names_line(tmp_path):
     ({"dt": 0.0, "units": "g"}, "dt"),
     ({"dt": -1.0, "units": "g"}, "dt"),
     ({"dt": math.nan, "units": "g"}, "dt"),
-    ({"dt": 0.01, "units": "gal"}, "units"),
+    ({"dt": 0.01, "units": "furlong/s2"}, "units"),
+    ({"dt": 0.01, "units": "cm/s"}, "units"),
     ({"dt": 0.01, "units": None}, "units"),
     ({"dt": 0.01, "units": "g", "t0": math.nan}, "t0"),
 ])
@@ -264,7 +387,8 @@ def test_columns_round_trip(tmp_path, rows, dt, t0):
     ({"units": "g"}, "record-dt"),
     ({"dt": 0.01}, "record-units"),
     ({"dt": 0.0, "units": "g"}, "record-dt"),
-    ({"dt": 0.01, "units": "mm/s2"}, "record-units"),
+    ({"dt": 0.01, "units": "km/h"}, "record-units"),
+    ({"dt": 0.01, "units": 3}, "record-units"),
     ({"dt": 0.01, "units": "g", "scale": 0.0}, "record-scale"),
     ({"dt": 0.01, "units": "g", "scale": math.nan}, "record-scale"),
 ])
