@@ -507,7 +507,7 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
     """
     from .engines import REGISTRY, get_backend
     from .runner import REFERENCE, resolve_engines
-    from .scene.scene import Scene, load_scene
+    from .scene.scene import load_scene
     from .tradeoff import machine_info, summarize, tradeoff, validation_set
     from .validation import SEED
 
@@ -516,8 +516,7 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
         raise ParameterError("quick", quick, "not together with full")
     size = "quick" if quick else "full" if full else "default"
     contact = full if contact is None else bool(contact)
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
+    scene = load_scene(scene)          # a name, a file or a Scene: the one resolver
     names = ([n for n in REGISTRY if n != REFERENCE] if engines is None
              else [n for n in resolve_engines(engines) if n != REFERENCE])
     if not names:

@@ -658,11 +658,10 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
         (each for every engine; without dt an engine runs at its default step).
     """
     from .runner import REFERENCE, resolve_engines
-    from .scene.scene import Scene, load_scene
+    from .scene.scene import load_scene
     from .sweep.executors import execute
 
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
+    scene = load_scene(scene)          # a name, a file or a Scene: the one resolver
     if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
         raise ParameterError("repeat", repeat, "an integer >= 1")
     if self_consistency not in ("grid", "run", "none"):
