@@ -32,7 +32,8 @@ CLASS_COLORS = {"within 1%": "#2e7d32", "within 5%": "#9ccc65", "off": "#ef6c00"
                 "diverged": "#c62828", "invalid": "#6a1b9a", "outside model": "#9e9e9e"}
 
 _ERROR_LABELS = {
-    "worst_error": "worst validation error [-]\n(|peak error| of surviving pulses, free-rocking eta)",
+    "worst_error": "worst validation error [-]\n(|peak error| of pulses and records, "
+                   "free-rocking eta)",
     "peak_error_worst": "worst |peak error| over the surviving pulses [-]",
     "peak_error_median": "median |peak error| over the surviving pulses [-]",
     "nrmse_worst": "worst nrmse [-]",
