@@ -205,16 +205,17 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
     Same signature, arguments and :class:`rockbench.result.Result` schema as
     :func:`rockbench.analytic.solver.simulate` (see its docstring; ``settings`` is an
     ``AnalyticSettings``: rtol, atol, output_dt, rest_ratio and history are honoured; method must
-    be "DOP853" (the scheme compiled here) or "compiled"). ``motion`` may be a RickerPulse, a
+    be "DOP853" (the scheme compiled here), "compiled" or "auto"). ``motion`` may be a RickerPulse, a
     Record or None (free rocking). ``cost.wall_s`` counts the compiled integration only;
     ``cost.steps`` counts accepted steps and ``cost.rhs_calls`` evaluations of phi''.
     """
     _require_numba()
     from .solver import AnalyticSettings
     settings = settings or AnalyticSettings()
-    if settings.method not in ("DOP853", "compiled"):
+    if settings.method not in ("DOP853", "compiled", "auto"):
         raise ParameterError("settings.method", settings.method,
-                             "'DOP853' or 'compiled' (the compiled path integrates DOP853 only; "
+                             "'DOP853', 'compiled' or 'auto' (the compiled path integrates DOP853 "
+                             "only; "
                              "use rockbench.analytic.solver.simulate for other methods)")
     ref = reference if reference is not None and reference.scene == scene else reference_of(scene)
     geo, sc = scene_arrays(scene)

@@ -51,7 +51,11 @@ from ..scene.scene import Scene
 from . import rules
 from .reference import Reference, reference_of
 
-__all__ = ["AnalyticSettings", "simulate"]
+__all__ = ["AnalyticSettings", "METHODS", "simulate"]
+
+
+#: Values of ``AnalyticSettings.method``: the path chooser, the compiled path, solve_ivp's methods.
+METHODS = ("auto", "compiled", "DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")
 
 
 @dataclass(frozen=True)
@@ -61,9 +65,13 @@ class AnalyticSettings:
     rtol, atol : relative and absolute tolerances of solve_ivp (atol in rad and rad/s); rtol in
         [1e-13, 1e-3], atol in [1e-16, 1e-3] (limits ``rtol``, ``atol`` of
         :mod:`rockbench.limits`, overridable with ROCKBENCH_RTOL / ROCKBENCH_ATOL).
-    method : a solve_ivp method ("DOP853" default, the reference; "RK45", "Radau" ...) or
-        "compiled": the same DOP853 scheme and event rules compiled with numba
-        (:mod:`rockbench.analytic.compiled`), the default of maps and record comparisons.
+    method : "auto" (default): a record through the compiled path when numba imports, any
+        other motion (pulses, free rocking) through ``solve_ivp`` with DOP853; "compiled": the
+        same DOP853 scheme and event rules compiled with numba
+        (:mod:`rockbench.analytic.compiled`, the default of maps); or a solve_ivp method
+        ("DOP853", the plain reference path; "RK45", "Radau" ...). Both DOP853 paths agree on
+        every well-conditioned quantity (docs/reproducibility.md); ``Result.settings["path"]``
+        says which one ran.
     output_dt : interval [s] of the history samples (independent of the integrator's steps),
         in [1e-5, 1] s (limit ``output_dt``).
     rest_ratio : a post-impact |phi'| below rest_ratio * p * alpha [rad/s] ends rocking
@@ -79,7 +87,7 @@ class AnalyticSettings:
 
     rtol: float = 1e-10
     atol: float = 1e-12
-    method: str = "DOP853"
+    method: str = "auto"
     output_dt: float = 1e-3
     rest_ratio: float = rules.REST_RATIO
     history: str = "full"
@@ -97,11 +105,11 @@ class AnalyticSettings:
                            check_range("eta_factor", self.eta_factor, 0.0, 2.0, lo_open=True))
         if self.history not in ("full", "minimal"):
             raise ParameterError("history", self.history, "'full' or 'minimal'")
-        if self.method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "compiled"):
+        if self.method not in METHODS:
             raise ParameterError("method", self.method,
-                                 "one of DOP853, RK45, RK23, Radau, BDF, LSODA (solve_ivp, the "
-                                 "reference) or compiled (the numba path, same scheme as "
-                                 "DOP853)")
+                                 "auto (records compiled, other motions solve_ivp), compiled "
+                                 "(the numba path, same scheme as DOP853) or one of DOP853, "
+                                 "RK45, RK23, Radau, BDF, LSODA (solve_ivp)")
 
 
 class _Zero:
@@ -146,10 +154,13 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     phi0, phidot0 : float
         Initial rotation [rad] and angular velocity [rad/s] (default: rest).
     settings : AnalyticSettings
+        ``method`` "auto" or "compiled" integrates DOP853 here (this function is the solve_ivp
+        path; the backend chooses between paths).
     reference : Reference, optional
         Precomputed constants of ``scene`` (saves their set-up in sweeps).
     """
     settings = settings or AnalyticSettings()
+    ivp_method = "DOP853" if settings.method in ("auto", "compiled") else settings.method
     ref = reference if reference is not None and reference.scene == scene else reference_of(scene)
     mot = motion if motion is not None else _Zero()
     t0 = float(mot.t_start)
@@ -299,7 +310,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         names.append("peak")
 
         try:
-            sol = solve_ivp(rhs, (t, t_end), (phi, phid), method=settings.method,
+            sol = solve_ivp(rhs, (t, t_end), (phi, phid), method=ivp_method,
                             rtol=settings.rtol, atol=settings.atol, events=evs, dense_output=True)
         except (ValueError, ArithmeticError, RuntimeError) as exc:
             status = "invalid"
@@ -379,7 +390,8 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         n_impacts=n_imp, fractured=fractured, t_fracture=t_frac, status=status, reason=reason)
     cost = Cost(wall_s=wall, sim_time=t_end - t0, steps=steps, rhs_calls=nfev)
     return Result(backend="analytic", scene=scene, motion=mot.describe(), history=history,
-                  events=events, summary=summary, cost=cost, settings=asdict(settings))
+                  events=events, summary=summary, cost=cost,
+                  settings={**asdict(settings), "path": "solve_ivp"})
 
 
 def _history(ref: Reference, mot, segments, t0: float, t_end: float,

@@ -3,6 +3,13 @@ reference (:func:`rockbench.analytic.solver.simulate`), as MuJoCo's ``rollout_te
 fast rollout against the plain one: same inputs, same verdicts, max |phi| / alpha within 1e-4
 (measured: ~1e-13 on pulses), histories within 1e-6 alpha on the output grid.
 
+What is compared is what is well-conditioned (docs/reproducibility.md): the two paths evaluate
+the same formulas with different rounding, so they differ from their first step at round-off,
+which the step-size controller turns into differences at the integration tolerance. Impact
+counts and event sequences are compared only on runs whose every rule decision (rest, chatter,
+critical, fracture and fall angles) is made at least ``DECISION_MARGIN`` away from its threshold
+(:func:`assert_decided_with_margin`); on a long record they are chaotic and never compared.
+
 Maps: a 10 x 10 x 4 map of ``paper-asymmetric`` and ``paper-asymmetric-hybrid-eps1`` in the
 default suite; the issue's 40 x 40 x 4 map of three scenes is marked slow. A cell whose verdict
 differs is accepted only if it lies within 0.5 % of a verdict boundary along the amplitude axis:
@@ -20,6 +27,7 @@ import pytest
 
 from rockbench.analytic import compiled, rules
 from rockbench.analytic.compiled import NUMBA_AVAILABLE, run_pulse_grid, simulate_compiled
+from rockbench.analytic.reference import reference_of
 from rockbench.analytic.solver import AnalyticSettings, simulate
 from rockbench.errors import BackendUnavailable
 from rockbench.result import CONTACT_COLUMNS, EVENT_COLUMNS, HISTORY_COLUMNS
@@ -45,6 +53,15 @@ EL_CENTRO = _el_centro()
 VERDICTS = ("overturned", "exceeded_critical", "fractured")
 PHI_TOL = 1e-6        # history: |phi_compiled - phi_reference| / alpha on the output grid
 PEAK_TOL = 1e-4       # max |phi| / alpha (the issue's tolerance)
+# Every rule decision of a run whose impact count is compared lies at least this far (relative)
+# from its threshold: 1e5 x the largest cross-path difference of a post-impact velocity measured
+# on the single-run cases below (8e-12 relative), so no rounding can flip a decision.
+DECISION_MARGIN = 1e-6
+# The strong part of El Centro 1940 [s] over which phi is compared: it holds the peak (6.06 s on
+# the free-standing frame, 5.13 s on the hybrid one); there the two paths differ by <= 7e-8 alpha,
+# and so does the compiled path under a 1-ulp change of the record's samples (the difference
+# grows about 10 x every 4 s, reaching PHI_TOL near 12 s and O(amplitude) after 25 s).
+EL_CENTRO_STRONG_PART = 7.0
 MINIMAL = AnalyticSettings(history="minimal")
 
 
@@ -165,8 +182,42 @@ def test_map_below_uplift_threshold_stays_at_rest():
 
 
 # --- single runs: histories --------------------------------------------------------------------
+def assert_decided_with_margin(ref, scene, margin: float = DECISION_MARGIN) -> None:
+    """Every discrete decision of the run ``ref`` is made at least ``margin`` (relative) away
+    from its threshold: post-impact |phi'| against the rest and chatter velocities, intervals
+    between impacts against the chatter interval (rockbench.analytic.rules), and every peak's
+    |phi| against the critical, fracture and fall angles of its direction. Only then is an
+    impact count or an event sequence a well-conditioned quantity that two paths (or two CPUs)
+    must agree on; a case that fails this is a badly chosen test case, not a bug."""
+    r = reference_of(scene)
+    rest_ratio = ref.settings.get("rest_ratio", rules.REST_RATIO)
+    scale = r.p * r.alpha
+    ev = ref.events
+    imp = ev[ev["kind"] == "impact"]
+    va = np.abs(imp["phidot_after"].to_numpy())
+    close = []
+    for name, thr, vals in (("rest", rest_ratio * scale, va),
+                            ("chatter velocity", rules.CHATTER_VELOCITY_RATIO * scale, va),
+                            ("chatter interval", rules.CHATTER_INTERVAL / r.p,
+                             np.diff(imp["t"].to_numpy()))):
+        if thr > 0 and vals.size:
+            worst = float(np.min(np.abs(vals / thr - 1.0)))
+            if worst <= margin:
+                close.append((name, worst))
+    for _, row in ev[ev["kind"] == "peak"].iterrows():
+        s = int(row["direction"])
+        for name, a in (("fall", r.fall[s]), ("fracture", r.fracture_angle[s]),
+                        ("critical", r.critical[(s, True)]),
+                        ("critical fractured", r.critical[(s, False)])):
+            if math.isfinite(a) and abs(abs(row["phi"]) / a - 1.0) <= margin:
+                close.append((f"{name} angle at t = {row['t']:.6g} s", abs(row["phi"]) / a - 1))
+    assert not close, f"a rule decision within {margin:g} of its threshold: {close}"
+
+
 def assert_same_run(fast, ref, scene, *, phi_tol=PHI_TOL, t_max=None):
-    """The drop-in contract: same schema, same events and verdicts, phi on the grid."""
+    """The drop-in contract: same schema, same verdicts, phi on the grid; over the whole run
+    (``t_max`` None, only for runs decided with a margin) also the same events and impact
+    count; up to ``t_max`` [s] only phi (a record's strong part)."""
     hf, hr = fast.history, ref.history
     assert list(hf.columns) == list(HISTORY_COLUMNS) + list(CONTACT_COLUMNS)
     assert list(fast.events.columns) == list(EVENT_COLUMNS)
@@ -180,7 +231,11 @@ def assert_same_run(fast, ref, scene, *, phi_tol=PHI_TOL, t_max=None):
     for k in ("overturned", "exceeded_critical", "fractured", "uplifted", "status"):
         assert getattr(fs, k) == getattr(rs, k), k
     assert fs.max_abs_phi_over_alpha == pytest.approx(rs.max_abs_phi_over_alpha, abs=phi_tol)
+    assert (fs.t_uplift is None) == (rs.t_uplift is None)
+    if rs.t_uplift is not None:
+        assert fs.t_uplift == pytest.approx(rs.t_uplift, abs=1e-9)
     if t_max is None:
+        assert_decided_with_margin(ref, scene)
         np.testing.assert_array_equal(hf["mode"].to_numpy(), hr["mode"].to_numpy())
         np.testing.assert_array_equal(hf["devices_intact"].to_numpy(),
                                       hr["devices_intact"].to_numpy())
@@ -188,7 +243,7 @@ def assert_same_run(fast, ref, scene, *, phi_tol=PHI_TOL, t_max=None):
         assert list(fast.events["kind"]) == list(ref.events["kind"])
         np.testing.assert_allclose(fast.events["t"], ref.events["t"], rtol=0, atol=1e-9)
         assert fast.cost.sim_time == pytest.approx(ref.cost.sim_time, abs=1e-9)
-        for t_name in ("t_overturn", "t_fracture", "t_uplift"):
+        for t_name in ("t_overturn", "t_fracture"):
             a, b = getattr(fs, t_name), getattr(rs, t_name)
             assert (a is None) == (b is None), t_name
             if a is not None:
@@ -251,19 +306,75 @@ def test_minimal_history_schema():
         assert fast.history[c].isna().all() == ref.history[c].isna().all(), c
 
 
-@pytest.mark.skipif(not EL_CENTRO.exists(), reason=f"record {EL_CENTRO} not available")
-@pytest.mark.parametrize("scene", [ASYM, EPS1], ids=lambda s: s.name)
-def test_el_centro_matches_reference(scene):
-    """A recorded accelerogram. Late in the record the small-amplitude rocking with hundreds of
-    impacts is ill-conditioned: the reference itself moves by ~1e-3 alpha there when its rtol
-    changes by 1e-7 relative (measured), so phi is compared on the first 8 s (the strong part,
-    where the peak occurs) and the verdicts and max |phi| / alpha over the whole record."""
+@pytest.fixture(scope="module")
+def el_centro():
+    """El Centro 1940 and the reference's run of it on each scene (computed once: ~10 s of CPU
+    on the free-standing frame)."""
+    if not EL_CENTRO.exists():
+        pytest.skip(f"record {EL_CENTRO} not available")
     from rockbench.scene.records import load_record
     rec = load_record(EL_CENTRO)
-    fast, ref = simulate_compiled(scene, rec), simulate(scene, rec)
+    cache: dict = {}
+
+    def reference(scene):
+        if scene.name not in cache:
+            cache[scene.name] = simulate(scene, rec)
+        return cache[scene.name]
+    return rec, reference
+
+
+def assert_same_strong_part(fast, ref, scene):
+    """A record's well-conditioned part: verdicts, the peak, the first uplift and impact, phi up
+    to EL_CENTRO_STRONG_PART (which holds the peak). Never the impact count of the whole record
+    (docs/reproducibility.md: it is chaotic; 241 vs 255 here, 236-255 across CPUs)."""
     assert ref.summary.n_impacts > 20
-    assert_same_run(fast, ref, scene, t_max=8.0)
-    assert abs(fast.summary.n_impacts - ref.summary.n_impacts) <= 0.05 * ref.summary.n_impacts
+    h = ref.history
+    t_peak = float(h["t"].to_numpy()[np.argmax(np.abs(h["phi"].to_numpy()))])
+    assert t_peak <= EL_CENTRO_STRONG_PART
+    assert_same_run(fast, ref, scene, t_max=EL_CENTRO_STRONG_PART)
+    first = [r.events.loc[r.events["kind"] == "impact", "t"].iloc[0] for r in (fast, ref)]
+    assert first[0] == pytest.approx(first[1], abs=1e-7)
+
+
+@pytest.mark.parametrize("scene", [ASYM, EPS1], ids=lambda s: s.name)
+def test_el_centro_matches_reference(scene, el_centro):
+    """A recorded accelerogram: verdicts, peak and phi over the strong part. The impact count of
+    the whole record is not compared: the rocking response to a record is chaotic (a 1-ulp change
+    of the record's samples moves the free-standing frame's count from 241 to 251 and its late
+    history by O(amplitude)), and the two paths differ from their first step by round-off."""
+    rec, reference = el_centro
+    assert_same_strong_part(simulate_compiled(scene, rec), reference(scene), scene)
+
+
+def _eta_times(factor):
+    def broken(sc, f):
+        out = np.array(sc)
+        out[2:4] *= f * factor
+        return out
+    return broken
+
+
+def _eta_of_pre_impact_direction(sc, f):
+    out = np.array(sc)
+    out[2], out[3] = sc[3] * f, sc[2] * f
+    return out
+
+
+@pytest.mark.parametrize("breakage", ["eta x 1.001", "eta of the pre-impact direction",
+                                      "rest threshold x 100"])
+def test_el_centro_comparison_fails_on_a_broken_rule(breakage, el_centro, monkeypatch):
+    """The record comparison can fail: a rule broken in the compiled path only is caught."""
+    rec, reference = el_centro
+    ref = reference(ASYM)
+    if breakage == "eta x 1.001":
+        monkeypatch.setattr(compiled, "_with_eta_factor", _eta_times(1.001))
+    elif breakage == "eta of the pre-impact direction":
+        monkeypatch.setattr(compiled, "_with_eta_factor", _eta_of_pre_impact_direction)
+    settings = AnalyticSettings(rest_ratio=100 * rules.REST_RATIO) \
+        if breakage == "rest threshold x 100" else None
+    fast = simulate_compiled(ASYM, rec, settings=settings)
+    with pytest.raises(AssertionError):
+        assert_same_strong_part(fast, ref, ASYM)
 
 
 # --- the rules are mirrored, and read when a run starts ------------------------------------------
@@ -271,10 +382,13 @@ def test_chatter_rule_is_mirrored(monkeypatch):
     """With the chatter rule disabled both paths step through the same longer impact sequence."""
     m = RickerPulse.dimensionless(1.5, 1.0, EPS1.structure, "symmetric", 1)
     with_rule = simulate_compiled(EPS1, m, settings=MINIMAL).summary.n_impacts
-    assert with_rule == simulate(EPS1, m, settings=MINIMAL).summary.n_impacts
+    plain = simulate(EPS1, m, settings=MINIMAL)
+    assert_decided_with_margin(plain, EPS1)      # the counts are well-conditioned
+    assert with_rule == plain.summary.n_impacts
     monkeypatch.setattr(rules, "CHATTER_VELOCITY_RATIO", 0.0)
     fast = simulate_compiled(EPS1, m, settings=MINIMAL)
     ref = simulate(EPS1, m, settings=MINIMAL)
+    assert_decided_with_margin(ref, EPS1)
     assert fast.summary.n_impacts == ref.summary.n_impacts > with_rule
     row = run_pulse_grid(EPS1, [("symmetric", 1, 1.5, 1.0)]).iloc[0]
     assert row["n_impacts"] == ref.summary.n_impacts
