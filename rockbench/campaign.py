@@ -442,7 +442,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     from .report.choice_page import choice_html
 
     sections.insert(at, ("choice-section", "Choosing a modelling approach",
-                         choice_html(choice, out / "figures")))
+                         choice_html(choice, out / "figures", with_work_precision=False)))
     at += 1
     sections.insert(at, ("maps-section", "Overturning maps (paper Figs. 4-7)", maps_html(
         maps, out / "figures",
@@ -450,6 +450,15 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                       f"W in {ANALYTIC_GRID['frequency']}, pulse window + 10 s",
         axes=f"A in {ENGINE_AXES['amplitude']}, W in {ENGINE_AXES['frequency']}, pulse window "
              f"+ {ENGINE_AXES['tail']:g} s")))
+    # the decision first (report/decision.py): the advice, one row per engine, work-precision
+    from .campaign_choice import CHOICE_SCENE
+    from .report.choice_page import work_precision_html
+    from .report.decision import decision_html
+
+    sections.insert(0, ("decision-section", "Which engine and settings", decision_html(
+        choice["advice"], scene=CHOICE_SCENE, agreement=maps["agreement"],
+        eta_summary=eta_summary, breaks=choice.get("breaks"),
+        work_precision_html=work_precision_html(choice, out / "figures", scene=CHOICE_SCENE))))
     timings["report"] = time.perf_counter() - t
     total = time.perf_counter() - t_start
     cpu = sum(float(p.get("cpu_s", 0.0)) for p in payloads + dt_payloads)

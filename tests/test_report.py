@@ -259,7 +259,7 @@ def test_quick_campaign_page(quick):
     path, page = quick
     n = assert_self_contained(page)
     figs = sorted(p.name for p in (path.parent / "figures").glob("*.png"))
-    assert figs == sorted(["summary_table.png", "histories_paper-asymmetric.png",
+    assert figs == sorted(["histories_paper-asymmetric.png",
                            "histories_paper-asymmetric-hybrid-eps1.png", "eta_free_rocking.png",
                            "eta_per_impact.png", "speed_accuracy.png", "overturning_map.png",
                            "record_peaks.png", "map_paper-asymmetric_analytic.png",
@@ -267,6 +267,14 @@ def test_quick_campaign_page(quick):
     assert n == len(figs)
     for p in (path.parent / "figures").glob("*.png"):
         assert png_size(p.read_bytes())[0] > 100
+    # legible figures: no overlapping labels, text at least 11 px in a 1400 px window
+    overlaps = re.findall(r'id="fig-([^"]+)"><img [^>]*data-overlaps="(\d+)"', page)
+    assert len(overlaps) == n and all(k == "0" for _, k in overlaps), overlaps
+    # the decision first: one sentence per tolerance, the per-engine table, work-precision
+    first = re.search(r'<section id="([^"]+)"', page).group(1)
+    assert first == "decision-section"
+    dec = page[page.index('id="decision-section"'):page.index('id="conclusion-section"')]
+    assert "For 2 %" in dec and 'id="decision-table"' in dec and 'fig-work_precision' in dec
 
 
 def test_quick_campaign_tables(quick):

@@ -75,6 +75,31 @@ window.addEventListener('load', function () {
   var ok = imgs.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length;
   document.body.setAttribute('data-rb-images', ok + '/' + imgs.length);
   document.body.setAttribute('data-rb-errors', JSON.stringify(window.__rbErrors));
+  var dec = document.getElementById('decision-section');
+  document.body.setAttribute('data-rb-dectop',
+                             dec ? String(dec.getBoundingClientRect().top) : '-1');
+  document.body.setAttribute('data-rb-dectext',
+                             dec ? dec.innerText.slice(0, 600).replace(/"/g, "'") : '');
+  // every collapsed section opened, then: the smallest figure text as shown, and tables wider
+  // than the page (a table inside a .scroll box scrolls on purpose)
+  document.querySelectorAll('details').forEach(function (d) { d.open = true; });
+  var minpx = 1e9, small = [];
+  imgs.forEach(function (i) {
+    var n = parseFloat(i.getAttribute('data-text-px'));
+    if (isNaN(n) || !(i.naturalWidth > 0)) return;
+    var s = n * i.getBoundingClientRect().width / i.naturalWidth;
+    if (s < minpx) minpx = s;
+    if (s < 10.95) small.push(((i.closest('figure') || {}).id || 'figure') + ' ' + s.toFixed(1));
+  });
+  document.body.setAttribute('data-rb-textpx', String(minpx));
+  document.body.setAttribute('data-rb-small', JSON.stringify(small).replace(/"/g, "'"));
+  var right = document.body.getBoundingClientRect().right, over = [];
+  document.querySelectorAll('table').forEach(function (t) {
+    if (t.closest('.scroll')) return;
+    if (t.getBoundingClientRect().right > right + 1)
+      over.push(((t.closest('section') || {}).id || 'page') + '/' + (t.id || 'table'));
+  });
+  document.body.setAttribute('data-rb-overflow', JSON.stringify(over).replace(/"/g, "'"));
   document.body.setAttribute('data-rb-loaded', 'yes');
 });
 </script>"""
@@ -99,8 +124,8 @@ def _probe(page: Path, tmp: Path) -> tuple[dict, str]:
     probe = page.parent / "_browser_probe.html"
     probe.write_text(html, encoding="utf-8")
     try:
-        res = _run_chromium(tmp, "--virtual-time-budget=10000", "--dump-dom",
-                            probe.as_uri())
+        res = _run_chromium(tmp, "--virtual-time-budget=10000", "--window-size=1400,1000",
+                            "--dump-dom", probe.as_uri())
     finally:
         probe.unlink(missing_ok=True)
     assert res.returncode == 0, res.stderr[-2000:]
@@ -110,7 +135,7 @@ def _probe(page: Path, tmp: Path) -> tuple[dict, str]:
     return attrs, res.stderr
 
 
-def _check_page(page: Path, tmp: Path) -> None:
+def _check_page(page: Path, tmp: Path) -> dict:
     n_img = len(re.findall(r"<img\b", page.read_text(encoding="utf-8")))
     assert n_img > 0
     attrs, stderr = _probe(page, tmp)
@@ -118,20 +143,28 @@ def _check_page(page: Path, tmp: Path) -> None:
     assert attrs["data-rb-images"] == f"{n_img}/{n_img}", attrs["data-rb-images"]
     errors = json.loads(attrs["data-rb-errors"].replace("&quot;", '"'))
     assert errors == [], errors
+    # legible at 100 % zoom in a 1400 px window: every figure's text at least 11 px as shown,
+    # and no table wider than the page
+    assert float(attrs["data-rb-textpx"]) >= 10.95, attrs["data-rb-small"]
+    crowded = re.findall(r'id="fig-([^"]+)"><img [^>]*data-overlaps="([1-9]\d*)"',
+                         page.read_text(encoding="utf-8"))
+    assert crowded == [], f"figures with overlapping labels: {crowded}"
+    assert attrs["data-rb-overflow"] == "[]", attrs["data-rb-overflow"]
     # Chromium's own log of the page: no uncaught error, no failed load, no console error
     for line in stderr.splitlines():
         assert "Uncaught" not in line, line
         assert "net::ERR_" not in line, line
         assert not re.search(r"CONSOLE\(\d+\).*error", line, re.IGNORECASE), line
     shot = tmp / "page.png"
-    res = _run_chromium(tmp, f"--screenshot={shot}", "--window-size=1280,2000",
+    res = _run_chromium(tmp, f"--screenshot={shot}", "--window-size=1400,2000",
                         page.as_uri())
     assert res.returncode == 0 and shot.is_file(), res.stderr[-2000:]
     data = shot.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     w, h = struct.unpack(">II", data[16:24])
-    assert (w, h) == (1280, 2000)
+    assert (w, h) == (1400, 2000)
     assert len(data) > 20_000            # a blank page compresses to a few kB
+    return attrs
 
 
 @pytest.fixture(scope="module")
@@ -172,4 +205,7 @@ def test_campaign_page_in_chromium(tmp_path):
     if not page.is_file():
         assert not given, f"ROCKBENCH_REPORT={given}: no such page"
         pytest.skip(f"{page} does not exist (run `make report`)")
-    _check_page(page, tmp_path)
+    attrs = _check_page(page, tmp_path)
+    # the decision is on the first screen: which engine and settings for each tolerance
+    assert 0 <= float(attrs["data-rb-dectop"]) < 1000, attrs["data-rb-dectop"]
+    assert "For 2 %" in attrs["data-rb-dectext"], attrs["data-rb-dectext"]

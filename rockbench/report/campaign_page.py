@@ -88,6 +88,12 @@ def fracture_html(frac, units) -> str:
             + H.html_table(frac, cols, units=units, table_id="fracture", scroll=True))
 
 
+def _details(summary: str, inner: str, *, open_: bool = False) -> str:
+    """Long evidence, collapsed under a one-line summary."""
+    return (f'<details class="evidence"{" open" if open_ else ""}><summary>{H.escape(summary)}'
+            f"</summary>{inner}</details>")
+
+
 def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, engines_tab,
                   speed, omap, records, lines, notes, figdir, *, quick, records_dir, store_dir,
                   fingerprint, engine_versions, files) -> list[tuple[str, str, str]]:
@@ -105,12 +111,13 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             units.setdefault(k, v)
     sections: list[tuple[str, str, str]] = []
 
-    # conclusion
-    conc = H.conclusion_html(lines)
+    # findings (the decision above them is assembled by the campaign: report/decision.py)
+    conc = _details(f"All findings, in words ({len(lines)})", H.conclusion_html(lines),
+                    open_=False)
     if notes:
         conc += "<h3>Notes</h3><ul>" + "".join(f"<li>{H.escape(n)}</li>" for n in notes) + \
             "</ul>"
-    sections.append(("conclusion-section", "Conclusion", conc))
+    sections.append(("conclusion-section", "Findings", conc))
 
     # engine summary
     eng_cols = list(CAMPAIGN_COLUMNS["engines.csv"])
@@ -118,15 +125,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
                 "peak_rel_error_median": "peak_rel_error", "peak_rel_error_max": "peak_rel_error",
                 "eta_mean_rel_error": "eta_mean_rel_error"}
     summ = H.grade_legend() + H.html_table(engines_tab, eng_cols, units=units, grade_as=grade_as,
-                                           table_id="engines")
-    if len(engines_tab):
-        summ += H.figure_html(
-            F.plot_summary_table(engines_tab, [c for c in eng_cols if c != "engine_version"],
-                                 grade_as=grade_as,
-                                 title="Every engine against the analytic model"),
-            "The summary table as a figure (same colours): medians and extremes over the "
-            "pulse cases, free-rocking eta error, verdict agreement (pulse cases + overturning "
-            "map), real-time factors.", name="summary_table", png_dir=figdir)
+                                           table_id="engines", scroll=True)
     sections.append(("summary-section", "Summary per engine", summ))
 
     # histories
@@ -150,8 +149,9 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
                  f"Grey: +-[low, high] of the analytic model's sensitivity band of the peak "
                  f"(docs/records.md).",
             name=f"histories_{scene}", png_dir=figdir))
-    sections.append(("histories-section", "Rotation histories", "\n".join(hist) or
-                     "<p>No pulse case finished.</p>"))
+    sections.append(("histories-section", "Rotation histories",
+                     _details(f"Rotation histories of every pulse case ({len(pulses)} cases)",
+                              "\n".join(hist)) if hist else "<p>No pulse case finished.</p>"))
 
     # pulse table
     shown = H.with_derived(metrics) if len(metrics) else metrics
@@ -163,9 +163,11 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
         cols[4:4] = ["band_low", "band_high", "within_band", "band_distance"]
     pulse_rows = shown[shown["part"] == "pulse"] if len(shown) else shown
     tab = H.html_table(pulse_rows, cols, units=units, table_id="cases", scroll=True)
-    sections.append(("cases-section", "Every pulse case", H.grade_legend()
-                     + band_summary_html(pulse_rows, "pulse-case peaks") + tab +
-                     '<p>All columns: <a href="metrics.csv">metrics.csv</a>.</p>'))
+    sections.append(("cases-section", "Every pulse case",
+                     band_summary_html(pulse_rows, "pulse-case peaks")
+                     + _details(f"The table of every pulse case ({len(pulse_rows)} runs)",
+                                H.grade_legend() + tab)
+                     + '<p>All columns: <a href="metrics.csv">metrics.csv</a>.</p>'))
 
     # fracture cases
     frac = shown[shown["part"] == "fracture"] if len(shown) else shown

@@ -143,9 +143,20 @@ def figure_html(fig, caption: str, *, name: str | None = None,
                 png_dir: str | Path | None = None, dpi: int = 100) -> str:
     """A ``<figure>`` with the figure embedded as a base64 PNG ``data:`` URI; when ``png_dir``
     and ``name`` are given the PNG is also written to ``png_dir/name.png``. The figure is
-    closed (its memory released) afterwards."""
+    closed (its memory released) afterwards.
+
+    Every text is first raised to at least :data:`~rockbench.report.legibility.MIN_TEXT_PX`
+    pixels as shown in a 1400 px window (:func:`~rockbench.report.legibility.make_legible`);
+    the ``<img>`` carries that size (``data-text-px``, at its natural width) and the number of
+    overlapping labels (``data-overlaps``, :func:`~rockbench.report.legibility.overlapping_texts`)
+    for the tests."""
     import base64
 
+    from .legibility import display_scale, make_legible, overlapping_texts
+
+    shown_px = make_legible(fig, dpi)
+    natural_px = shown_px / display_scale(fig, dpi)
+    overlaps = len(overlapping_texts(fig))
     png = F.png_bytes(fig, dpi=dpi)
     fig.clear()
     if png_dir is not None and name:
@@ -154,7 +165,8 @@ def figure_html(fig, caption: str, *, name: str | None = None,
         (d / f"{name}.png").write_bytes(png)
     uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
     fid = f' id="fig-{escape(name)}"' if name else ""
-    return (f'<figure{fid}><img src="{uri}" alt="{escape(caption)}">'
+    return (f'<figure{fid}><img src="{uri}" alt="{escape(caption)}" '
+            f'data-text-px="{natural_px:.2f}" data-overlaps="{overlaps}">'
             f"<figcaption>{escape(caption)}</figcaption></figure>")
 
 
