@@ -1,7 +1,8 @@
-"""``rockbench stress``: every backend at the extremes, one axis at a time from the paper's frame.
+"""``rockbench stress``: every backend at the extremes, one axis at a time from a base scene.
 
-Each :class:`StressPoint` changes one thing of the paper's asymmetric frame
-(``paper-asymmetric``; the device axes start from ``paper-asymmetric-hybrid``) and runs it with
+Each :class:`StressPoint` changes one thing of the base scene (by default the paper's asymmetric
+frame ``paper-asymmetric``, whose device axes start from ``paper-asymmetric-hybrid``; a user's
+scene is its own base, with the device axes only when it has devices) and runs it with
 the analytic reference and every selected engine at its default settings (the ``dt`` axis
 changes the engines' step). Every point of every engine gives a row (:data:`STRESS_COLUMNS`),
 whatever happens: an invalid scene or setting, an exception, a diverged run each become a row
@@ -42,27 +43,27 @@ from .errors import ParameterError
 from .tradeoff import classify_error
 
 __all__ = ["AXES", "StressPoint", "stress_points", "run_point", "stress", "Stress",
-           "breaking_points", "STRESS_COLUMNS", "synthetic_record", "PAPER_VALUES"]
+           "breaking_points", "STRESS_COLUMNS", "synthetic_record", "PAPER_VALUES",
+           "base_values"]
 
 _BASE = "paper-asymmetric"
 _HYBRID = "paper-asymmetric-hybrid"
-_H = 7.0                 # height of the paper frame's taller column [m]
-_K = 23.5e6              # paper tendon stiffness [N/m]
-_C = 25.3e6              # paper damper constant [N s/m]
 _REBOUND = 0.2           # effective eta above the analytic one by more than this: rebounding
 _PULSE = dict(kind="ricker", shape="symmetric", sign=1)
 
-#: axis -> (meaning and unit, fast values, full values)
+#: axis -> (meaning and unit, fast values, full values). The base point is the scene the sweep
+#: starts from (the paper's asymmetric frame by default); the device axes scale its own tendons
+#: and dampers (the paper's hybrid frame by default).
 AXES: dict[str, tuple[str, tuple, tuple]] = {
-    "alpha": ("slenderness of the taller column [rad] (column width 7 tan(alpha); free rocking "
-              "from 0.5 alpha)", (0.05, 0.6), (0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6)),
-    "mass_ratio": ("beam / column mass ratio [-] (free rocking from 0.5 alpha)",
+    "alpha": ("slenderness of the taller column [rad] (its width H tan(alpha) at its height H; "
+              "free rocking from 0.5 alpha)", (0.05, 0.6), (0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6)),
+    "mass_ratio": ("beam / column mass ratio [-] (frames; free rocking from 0.5 alpha)",
                    (0.1, 100.0), (0.1, 0.3, 1.0, 3.0, 30.0, 100.0)),
-    "H1/H": ("right / left column height [-] (free rocking from 0.5 alpha)", (0.5,),
+    "H1/H": ("right / left column height [-] (frames; free rocking from 0.5 alpha)", (0.5,),
              (0.5, 0.6, 0.7, 0.9, 1.0)),
-    "tendon": ("tendon stiffness / the paper's 23.5 MN/m [-] (hybrid frame, symmetric pulse "
+    "tendon": ("tendon stiffness / the scene's own [-] (scenes with devices; symmetric pulse "
                "A = 7, W = 3)", (0.0, 1000.0), (0.0, 0.1, 10.0, 100.0, 1000.0)),
-    "damper": ("damper constant / the paper's 25.3 MN s/m [-] (hybrid frame, A = 7, W = 3)",
+    "damper": ("damper constant / the scene's own [-] (scenes with devices; A = 7, W = 3)",
                (0.0, 10.0), (0.0, 0.3, 3.0, 10.0)),
     "dt": ("engine time step [s] (symmetric pulse A = 2.5, W = 3)", (1e-2,),
            (1e-5, 1e-4, 4e-3, 1e-2)),
@@ -74,7 +75,28 @@ AXES: dict[str, tuple[str, tuple, tuple]] = {
                (20.0, 100.0)),
 }
 
-#: The paper frame's value on every axis (the base point).
+#: Axes a scene without tendons and dampers has no use for, and those a block has not.
+_DEVICE_AXES = ("tendon", "damper")
+_FRAME_AXES = ("mass_ratio", "H1/H")
+
+
+def base_values(scene=None) -> dict[str, float]:
+    """The base point's value on every axis: the scene's alpha [rad], beam / column mass ratio
+    and H1/H (frames), 1 on the device axes, dt 1e-3 s, A = 2.5, W = 3 (the base pulse)."""
+    from .scene.scene import load_scene
+
+    sc = load_scene(_BASE if scene is None else scene)
+    st = sc.structure
+    out = {"alpha": round(float(sc.alpha), 4), "tendon": 1.0, "damper": 1.0, "dt": 1e-3,
+           "A": 2.5, "W": 3.0, "record": math.nan}
+    if hasattr(st, "column_height_right"):
+        out["H1/H"] = round(st.column_height_right / st.column_height_left, 6)
+        mr = getattr(st, "mass_ratio", None)
+        out["mass_ratio"] = float(mr) if mr is not None else math.nan
+    return out
+
+
+#: The paper frame's value on every axis (the default base point).
 PAPER_VALUES: dict[str, float] = {"alpha": 0.1419, "mass_ratio": 10.0, "H1/H": 0.8,
                                   "tendon": 1.0, "damper": 1.0, "dt": 1e-3, "A": 2.5, "W": 3.0,
                                   "record": math.nan}
@@ -82,14 +104,15 @@ PAPER_VALUES: dict[str, float] = {"alpha": 0.1419, "mass_ratio": 10.0, "H1/H": 0
 
 @dataclass(frozen=True)
 class StressPoint:
-    """One point of one axis (plain data). ``scene``: a built-in name; ``overrides``: scene
+    """One point of one axis (plain data). ``scene``: a built-in name, a TOML path or a Scene;
+    ``overrides``: scene
     overrides (name, value); ``motion``: a Ricker spec as (key, value) pairs, ``("record",
     length)`` for the synthetic record, or None (free rocking from ``phi0`` x alpha);
     ``settings``: engine setting overrides; ``duration`` [s] (None: chosen from the motion)."""
 
     axis: str
     value: float
-    scene: str
+    scene: Any
     overrides: tuple = ()
     motion: tuple | None = None
     phi0: float = 0.0
@@ -101,44 +124,75 @@ class StressPoint:
         return f"{self.axis}={self.value:g}"
 
 
-def _point(axis: str, v: float) -> StressPoint:
+def _point(axis: str, v: float, base: Any = _BASE, hybrid: Any = _HYBRID) -> StressPoint:
+    """The point ``v`` of ``axis`` from the ``base`` scene (the device axes from ``hybrid``, the
+    same structure with devices); the overrides scale the scene's own values."""
+    from .scene.scene import load_scene
+
     pulse = lambda A, W: tuple(sorted({**_PULSE, "A": A, "W": W}.items()))  # noqa: E731
-    if axis == "alpha":
-        return StressPoint(axis, v, _BASE, (("column_width", round(_H * math.tan(v), 6)),),
-                           None, 0.5)
-    if axis == "mass_ratio":
-        return StressPoint(axis, v, _BASE, (("mass_ratio", v),), None, 0.5)
-    if axis == "H1/H":
-        return StressPoint(axis, v, _BASE, (("column_height_right", round(_H * v, 6)),), None,
+    if axis in ("alpha", "H1/H"):
+        st = load_scene(base).structure
+        frame = hasattr(st, "column_height_left")
+        H = st.column_height_left if frame else st.height
+        if axis == "alpha":
+            key = "column_width" if frame else "width"
+            return StressPoint(axis, v, base, ((key, round(H * math.tan(v), 6)),), None, 0.5)
+        return StressPoint(axis, v, base, (("column_height_right", round(H * v, 6)),), None,
                            0.5)
-    if axis == "tendon":
-        return StressPoint(axis, v, _HYBRID, (("tendon_stiffness", _K * v),), pulse(7.0, 3.0))
-    if axis == "damper":
-        return StressPoint(axis, v, _HYBRID, (("damping", _C * v),), pulse(7.0, 3.0))
+    if axis == "mass_ratio":
+        return StressPoint(axis, v, base, (("mass_ratio", v),), None, 0.5)
+    if axis in _DEVICE_AXES:
+        dev = load_scene(hybrid).devices
+        key, own = (("tendon_stiffness", dev.tendon_stiffness) if axis == "tendon" else
+                    ("damping", dev.damping))
+        return StressPoint(axis, v, hybrid, ((key, own * v),), pulse(7.0, 3.0))
     if axis == "dt":
-        return StressPoint(axis, v, _BASE, (), pulse(2.5, 3.0), 0.0, (("dt", v),))
+        return StressPoint(axis, v, base, (), pulse(2.5, 3.0), 0.0, (("dt", v),))
     if axis == "A":
-        return StressPoint(axis, v, _BASE, (), pulse(v, 3.0))
+        return StressPoint(axis, v, base, (), pulse(v, 3.0))
     if axis == "W":
-        return StressPoint(axis, v, _BASE, (), pulse(3.0, v))
+        return StressPoint(axis, v, base, (), pulse(3.0, v))
     if axis == "record":
-        return StressPoint(axis, v, _BASE, (), ("record", v), 0.0, (), v + 5.0)
+        return StressPoint(axis, v, base, (), ("record", v), 0.0, (), v + 5.0)
     raise ParameterError("axis", axis, f"one of {', '.join(AXES)}")
 
 
-def stress_points(full: bool = False, axes: Sequence[str] | None = None) -> list[StressPoint]:
-    """The points of the fast (default) or ``full`` form, the paper's frame first (as the
-    ``paper`` axis, free rocking from 0.5 alpha and the A = 2.5, W = 3 pulse)."""
+def stress_points(full: bool = False, axes: Sequence[str] | None = None, *,
+                  scene: Any = None) -> list[StressPoint]:
+    """The points of the fast (default) or ``full`` form, the base scene first (as the ``base``
+    axis, or ``paper`` for the paper's frame: free rocking from 0.5 alpha and the A = 2.5,
+    W = 3 pulse).
+
+    ``scene``: the base (a name, a TOML path or a Scene; default the paper's asymmetric frame,
+    whose device axes start from the paper's hybrid frame). A user's scene is its own base;
+    the device axes run only when it has tendons and dampers, and the frame axes only on a
+    frame; asking for an axis the scene cannot have is an error."""
+    from .scene.scene import load_scene
+
+    if scene is None:
+        base, hybrid, label = _BASE, _HYBRID, "paper"
+    else:
+        sc = load_scene(scene)
+        base, hybrid, label = scene, (scene if sc.has_devices else None), "base"
+        frame = hasattr(sc.structure, "column_height_left")
     names = list(AXES) if axes is None else list(axes)
     for a in names:
         if a not in AXES:
             raise ParameterError("axes", a, f"axis names: {', '.join(AXES)}")
-    pts = [StressPoint("paper", 0.0, _BASE, (), None, 0.5),
-           StressPoint("paper", 1.0, _BASE, (), tuple(sorted({**_PULSE, "A": 2.5,
-                                                                "W": 3.0}.items())))]
+    if scene is not None:
+        unusable = [a for a in names if (a in _DEVICE_AXES and hybrid is None)
+                    or (a in _FRAME_AXES and not frame)]
+        if axes is not None and unusable:
+            raise ParameterError("axes", ",".join(unusable),
+                                 "axes the scene has (tendon, damper: scenes with devices; "
+                                 "mass_ratio, H1/H: frames)")
+        names = [a for a in names if a not in unusable]
+    pts = [StressPoint(label, 0.0, base, (), None, 0.5),
+           StressPoint(label, 1.0, base, (), tuple(sorted({**_PULSE, "A": 2.5,
+                                                             "W": 3.0}.items())))]
     for a in names:
         for v in AXES[a][2 if full else 1]:
-            pts.append(_point(a, float(v)))
+            pts.append(_point(a, float(v), base, hybrid))
     return pts
 
 
@@ -198,7 +252,7 @@ def _load(pt: StressPoint):
 #: Columns of :attr:`Stress.table`.
 STRESS_COLUMNS: dict[str, str] = {
     "engine": "-, backend name",
-    "axis": "-, what changes (AXES; 'paper': the paper's frame itself)",
+    "axis": "-, what changes (AXES; 'paper' / 'base': the base scene itself)",
     "value": "-, the axis value (unit in AXES)",
     "status": "-, the run's status (ok | diverged | invalid; invalid also for an exception)",
     "reason": "-, why not ok, or the exception",
@@ -354,9 +408,10 @@ class Stress:
 def stress(engines: Sequence[str] | None = None, *, full: bool = False,
            axes: Sequence[str] | None = None, points: Sequence[StressPoint] | None = None,
            executor: str = "process", workers: int | None = None,
-           progress: bool = False) -> Stress:
-    """Run every point (:func:`stress_points`, or ``points``) with every engine (default: the
-    available engines) through the one executor; return a :class:`Stress`."""
+           progress: bool = False, scene: Any = None) -> Stress:
+    """Run every point (:func:`stress_points` from ``scene``, default the paper's frame; or
+    ``points``) with every engine (default: the available engines) through the one executor;
+    return a :class:`Stress`."""
     from .engines import get_backend
     from .runner import REFERENCE, resolve_engines
     from .sweep.executors import execute
@@ -367,7 +422,7 @@ def stress(engines: Sequence[str] | None = None, *, full: bool = False,
     for n in names:
         ok, why = get_backend(n).available()
         (usable.append(n) if ok else unavailable.__setitem__(n, why))
-    pts = list(points) if points is not None else stress_points(full, axes)
+    pts = list(points) if points is not None else stress_points(full, axes, scene=scene)
     items = [(f"{i}", (n, p)) for i, (n, p) in enumerate((n, p) for p in pts for n in usable)]
     rows: dict[str, dict] = {}
     execute(run_point, items, on_result=lambda k, r: rows.__setitem__(k, r), crashed=_crashed,
@@ -378,16 +433,18 @@ def stress(engines: Sequence[str] | None = None, *, full: bool = False,
     return Stress(table=_validity(df), full=full, unavailable=unavailable)
 
 
-def breaking_points(table: pd.DataFrame) -> pd.DataFrame:
-    """Per engine and axis, the first value, going away from the paper's frame on either side,
-    whose class is off, diverged or invalid (columns engine, axis, side ("below" / "above" the
-    paper's value), value, class, reason); points outside the model's validity are skipped."""
+def breaking_points(table: pd.DataFrame, scene: Any = None) -> pd.DataFrame:
+    """Per engine and axis, the first value, going away from the base scene (``scene``; default
+    the paper's frame) on either side, whose class is off, diverged or invalid (columns engine,
+    axis, side ("below" / "above" the base value), value, class, reason); points outside the
+    model's validity are skipped."""
     bad = ("off", "diverged", "invalid")
+    values = PAPER_VALUES if scene is None else base_values(scene)
     out = []
     for (eng, axis), g in table.groupby(["engine", "axis"], sort=False):
-        if axis == "paper":
+        if axis in ("paper", "base"):
             continue
-        p = PAPER_VALUES.get(axis, math.nan)
+        p = values.get(axis, math.nan)
         g = g.sort_values("value")
         for side, sub in (("below", g[g["value"] < p].iloc[::-1]), ("above", g[g["value"] > p])
                           ) if math.isfinite(p) else (("all", g),):

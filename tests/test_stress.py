@@ -2,6 +2,8 @@
 
 import math
 
+import numpy as np
+
 import pandas as pd
 import pytest
 
@@ -104,3 +106,26 @@ def test_fast_form_pymunk_every_point_has_a_class():
     bad = t[t["class"].isin(["diverged", "invalid"])]
     assert (bad["reason"].str.len() > 0).all()
     assert (t[t["axis"] == "paper"]["class"] == "within 1%").all()
+
+
+def test_a_users_scene_is_its_own_base():
+    """The sweep starts from the user's scene: its own height sets the alpha axis, its own
+    devices the device axes, and axes the scene cannot have are left out (or refused)."""
+    import pytest
+
+    import rockbench as rb
+    from rockbench.errors import ParameterError
+
+    block = rb.Scene(rb.Block(width=0.6, height=2.4), name="pedestal")
+    pts = S.stress_points(scene=block)
+    axes = {p.axis for p in pts}
+    assert "base" in axes and not axes & {"tendon", "damper", "mass_ratio", "H1/H"}
+    a = next(p for p in pts if p.axis == "alpha" and p.value == 0.05)
+    assert dict(a.overrides)["width"] == pytest.approx(2.4 * np.tan(0.05), abs=1e-6)
+    with pytest.raises(ParameterError, match="axes"):
+        S.stress_points(scene=block, axes=["tendon"])
+    hybrid = rb.load_scene("paper-asymmetric-hybrid-eps1")
+    t = next(p for p in S.stress_points(scene=hybrid) if p.axis == "tendon" and p.value == 1000)
+    assert dict(t.overrides)["tendon_stiffness"] == pytest.approx(
+        1000 * hybrid.devices.tendon_stiffness)
+    assert S.base_values(block)["alpha"] == pytest.approx(np.arctan(0.6 / 2.4), abs=1e-4)
