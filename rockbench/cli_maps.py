@@ -50,6 +50,10 @@ def add_map_command(sub, _key_value, _count) -> None:
     p.add_argument("--compare", nargs=2, metavar=("A.parquet", "B.parquet"),
                    help="two stored maps of the same cells: agreement, kappa, boundary shift "
                         "(with --figure: B's verdicts overlaid on A)")
+    p.add_argument("--adaptive", action="store_true",
+                   help="simulate only where the verdict can change (a coarse pass, then "
+                        "refinement where neighbours differ or survival is near critical) and "
+                        "infer the other cells (marked in the store)")
     p.add_argument("--figure", metavar="FILE.png",
                    help="draw the map (with --compare: the overlay) to this image file "
                         "(.png, .pdf or .svg)")
@@ -164,12 +168,14 @@ def _cmd_map(args: argparse.Namespace) -> int:
     df = run_map(args.scene, args.engine, grid=args.grid, amplitude=args.amplitude,
                  frequency=args.frequency, pulses=args.pulses, overrides=scene_overrides,
                  settings=settings, method=method, store=store, workers=args.workers,
-                 scheduler=args.scheduler, progress=not args.quiet)
+                 scheduler=args.scheduler, progress=not args.quiet, adaptive=args.adaptive)
     summary = {"scene": args.scene, "engine": args.engine, "cells": len(df),
                "cells_run": int(df.attrs.get("cells_run", 0)),
                "reused": int(df.attrs.get("reused", 0)), "store": store,
                "overturned": int(df["overturned"].fillna(False).astype(bool).sum()),
                "not_ok": int((df["status"] != "ok").sum()), "method": df.attrs.get("method")}
+    if args.adaptive:
+        summary["inferred"] = int(df.attrs.get("inferred", 0))
     if figure is not None:
         from .report.map_figures import plot_map_panels
 
@@ -179,8 +185,10 @@ def _cmd_map(args: argparse.Namespace) -> int:
     if args.json:
         print_json(summary)
         return 0
+    how = (f", {summary['cells_run']} simulated now, {summary['inferred']} inferred"
+           if args.adaptive else "")
     print(f"{args.scene}, {args.engine}: {summary['cells']} cells ({summary['reused']} reused "
-          f"from {store}), {summary['overturned']} overturn, {summary['not_ok']} not ok")
+          f"from {store}{how}), {summary['overturned']} overturn, {summary['not_ok']} not ok")
     if figure is not None:
         print(f"figure: {figure}")
     return 0

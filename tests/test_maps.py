@@ -234,3 +234,35 @@ def test_map_figure_and_overlay(tmp_path, capsys):
     assert main(["map", "paper-asymmetric", *cells, "--store", str(store), "--figure",
                  str(tmp_path / "m.txt")]) == 2
     assert "--figure" in capsys.readouterr().err
+
+
+def test_adaptive_map_reproduces_the_full_grid_simulating_a_third(tmp_path, capsys):
+    """Issue 27: at 24 x 24 x 4 the adaptive map simulates at most a third of the cells and
+    gives >= 99.5 % of the full grid's verdicts; its store holds every cell, the inferred ones
+    marked; a rerun simulates nothing; a full run on its store simulates exactly the inferred
+    cells and gives the full map."""
+    import json
+
+    from rockbench.cli import main
+
+    kw = dict(grid=(24, 24), progress=False)
+    full = run_map("paper-asymmetric", **kw)
+    store = tmp_path / "a.parquet"
+    ad = run_map("paper-asymmetric", adaptive=True, store=store, **kw)
+    assert len(ad) == 24 * 24 * 4 and ad.attrs["cells_run"] <= len(ad) / 3
+    assert ad.attrs["inferred"] == int(ad["inferred"].sum()) == len(ad) - ad.attrs["cells_run"]
+    assert map_agreement(full, ad)["fraction"] >= 0.995
+    sim = ad[~ad["inferred"]].merge(full, on=["pulse", "sign", "amplitude", "frequency"],
+                                    suffixes=("", "_full"))
+    assert (sim["overturned"] == sim["overturned_full"]).all()   # simulated cells are exact
+    stored = load_map(store)
+    assert len(stored) == len(ad) and int(stored["inferred"].sum()) == ad.attrs["inferred"]
+    args = ["map", "paper-asymmetric", "--grid", "24x24", "--store", str(store), "--adaptive",
+            "--json"]
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["cells"] == 2304 and out["cells_run"] == 0
+    assert out["reused"] == 2304 - ad.attrs["inferred"]
+    again = run_map("paper-asymmetric", store=store, **kw)
+    assert again.attrs["cells_run"] == ad.attrs["inferred"] and "inferred" not in again
+    pd.testing.assert_frame_equal(again.drop(columns="wall_s"), full.drop(columns="wall_s"))

@@ -213,8 +213,10 @@ def test_a_second_writer_is_refused(good, tmp_path, capsys):
     assert run_map("paper-asymmetric", store=copy, progress=False, **CELLS).attrs["reused"] == 6
 
 
-#: 24 solve_ivp cells of 0.05-0.5 s each, one part file per cell
-KILLABLE = dict(grid=(6, 4), amplitude="2:8", frequency="2:5", pulses="symmetric+", tail=10.0)
+#: 24 solve_ivp cells of 0.05-0.5 s each, one part file per cell (the store keyed by its
+#: inputs only, so that the subprocess and this one agree on it whatever the code's hash)
+KILLABLE = dict(grid=(6, 4), amplitude="2:8", frequency="2:5", pulses="symmetric+", tail=10.0,
+                keyed_by_code=False)
 _KILLABLE = textwrap.dedent(f"""
     import sys
     from rockbench.maps import run_map
