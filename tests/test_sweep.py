@@ -211,7 +211,10 @@ def test_dask_local_cluster_gives_the_same_rows():
 
 
 # --- progress ----------------------------------------------------------------------------------
-def test_progress_bar_names_the_running_case(capsys):
+def test_progress_bar_names_the_running_case(capsys, monkeypatch):
+    from rockbench import progress
+
+    monkeypatch.setattr(progress, "INTERVAL", 0.0)   # off a terminal: a line per update
     run_cases(_grid()[:1], executor="serial", progress=True)
     err = capsys.readouterr().err
     assert "sweep" in err and "analytic housner-block symm+ A=3 W=4" in err
