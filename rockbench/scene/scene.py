@@ -191,12 +191,17 @@ class Scene:
             raise SceneError(f"{source}: preset = {preset!r}: the presets are "
                              f"{', '.join(repr(p) for p in _PRESETS)} (or leave preset out)")
         devices = None
+        st_table = data.get("structure")
         if data.get("devices") is not None:
             if not isinstance(data["devices"], Mapping):
                 raise SceneError(f"{source}: [devices] must be a table of device parameters, "
                                  f"got {data['devices']!r}")
             dv = dict(data["devices"])
             _check_keys(f"{source} [devices]", dv, Devices)
+            if isinstance(st_table, Mapping) and st_table.get("type") == "block":
+                raise ParameterError("devices", "given", "absent for a block",
+                                     f"{source}: tendons and dampers are defined for the frame "
+                                     "only")
             if preset is not None:
                 dv = {**_preset(preset, "devices"), **dv}
             if isinstance(dv.get("fracture_strain"), str):

@@ -195,6 +195,10 @@ def test_devices_on_a_block_are_rejected(tmp_path):
                                    '[devices]\ntendon_stiffness = 0.0\ntendon_length = 1.0\n'
                                    'fracture_strain = "none"\ndamping = 1e6\n'))
     check_error(e.value, "devices")
+    with pytest.raises(ParameterError) as e:   # said first, not "missing tendon_length"
+        load_scene(write(tmp_path, '[structure]\ntype = "block"\nwidth = 1.0\n'
+                                   '[devices]\ntendon_stiffness = 1e6\n', "p.toml"))
+    check_error(e.value, "devices", "absent for a block")
     with pytest.raises(ParameterError) as e:
         Scene(PAPER_FRAME, devices={"damping": 1.0})  # type: ignore[arg-type]
     check_error(e.value, "devices", "Devices")
