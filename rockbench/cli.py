@@ -2,27 +2,36 @@
 
 Commands (``docs/cli.md`` shows each with real output)::
 
-    rockbench scenes   [--json]
-    rockbench info     SCENE [--set key=value ...] [--json]
-    rockbench run      SCENE [--engine NAME] MOTION [--duration S] [--dt S]
-                       [--set key=value ...] [--setting name=value ...] [--out FILE.csv] [--json]
-    rockbench engines  [--json]
-    rockbench compare  SCENE [--engines a,b,...] MOTION [--duration S] [--dt S]
-                       [--set ...] [--setting ...] [--report DIR] [--csv FILE] [--json]
-    rockbench report   [--out DIR] [--records DIR] [--engines a,b,...] [--quick]
-                       [--workers N] [--dask ADDRESS] [--store PATH]
-    rockbench tradeoff SCENE [--engines a,b,...] [--dt 4e-3,2e-3,...] [--setting [ENGINE:]N=V ...]
-                       [--repeat N] [--quick] [--workers N] [--store PATH] [--out DIR] [--json]
-    rockbench advise   SCENE --tolerance 0.02 [--engines a,b,...] [--quick] [--store PATH]
-                       [--workers N] [--json]
-    rockbench stress   [--engines a,b,...] [--full] [--axes a,b,...] [--workers N] [--out DIR]
-                       [--json]
+    rockbench scenes    [--json]
+    rockbench info      SCENE [--set key=value ...] [--json]
+    rockbench run       SCENE [--engine NAME] MOTION [--duration S] [--dt S] [--set key=value ...]
+                        [--setting [ENGINE.]KEY=VALUE ...] [--out DIR] [--csv FILE.csv] [--json]
+    rockbench engines   [--json]
+    rockbench compare   SCENE [--engine NAME ...] MOTION [--duration S] [--dt S] [--set ...]
+                        [--setting ENGINE.KEY=VALUE ...] [--report DIR] [--csv FILE.csv] [--json]
+    rockbench report    [--out DIR] [--records DIR] [--engine NAME ...] [--quick] [--full]
+                        [--workers N] [--dask ADDRESS] [--store PATH]
+    rockbench tradeoff  SCENE [--engine NAME ...] [--dt 4e-3,2e-3,...]
+                        [--setting ENGINE.KEY=VALUE[,KEY=VALUE] ...] [--repeat N] [--quick]
+                        [--workers N] [--store PATH] [--out DIR] [--json]
+    rockbench advise    SCENE --tolerance 0.02 [--engine NAME ...] [--quick] [--store PATH]
+                        [--workers N] [--json]
+    rockbench stress    [--engine NAME ...] [--full] [--axes a,b,...] [--workers N] [--out DIR]
+                        [--json]
+    rockbench map       SCENE [--engine NAME] [--grid NAxNW] ... | --compare A B
+    rockbench fragility SCENE --records ... [--engine NAME ...] ...
+
+One grammar everywhere: ``--engine NAME`` (repeatable where a command runs several;
+``--engines`` is the same option), ``--setting ENGINE.KEY=VALUE`` (bare ``KEY=VALUE`` only when
+one engine is selected; parsed and validated once, in :mod:`rockbench.cli_input`), ``--out``
+always a folder, ``--phi0`` in radians as ``rockbench.run`` (``--phi0-alpha`` in multiples of
+alpha), ``--quiet`` for no progress (:mod:`rockbench.progress`).
 
 MOTION is one of
 ``--pulse symmetric|antisymmetric [--sign 1|-1] --amplitude A --frequency W`` (A = a_g /
 (g tan alpha), W = omega_g / p, alpha and p of the taller column), ``--record FILE
-[--record-dt S --record-units g|m/s2|cm/s2] [--scale F]``, or ``--phi0 X`` (free rocking from
-phi0 = X alpha). Units: SI and radians; times in s.
+[--record-dt S --record-units UNITS] [--scale F]`` (or the ``records.csv`` beside FILE), or
+``--phi0 RAD`` / ``--phi0-alpha X`` (free rocking). Units: SI and radians; times in s.
 
 Errors: any bad input (a :class:`rockbench.errors.RockbenchError` or an argument the parser
 rejects) prints one line ``rockbench: error: ...`` on stderr and returns 2, without a traceback;
