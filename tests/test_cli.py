@@ -476,3 +476,79 @@ def test_python_dash_m_entry_point():
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [proc.stderr.strip()]
     assert "Traceback" not in proc.stderr
+
+
+# --- one grammar (issue 23 §4) -----------------------------------------------------------------
+GRAMMAR_BAD = [
+    # before: tradeoff exited 0 with a row "invalid, inf" for a key pymunk has not
+    (["tradeoff", "paper-symmetric", "--engine", "pymunk", "--setting", "pymunk.iterationz=20"],
+     "pymunk.iterationz"),
+    (["tradeoff", "paper-symmetric", "--engine", "pymunk", "--setting", "pymunk.iterations=x"],
+     "pymunk.iterations"),
+    # before: tradeoff wanted pymunk:iterations=60; the colon form is refused with the right one
+    (["tradeoff", "paper-symmetric", "--engine", "pymunk", "--engine", "mujoco", "--setting",
+      "iterations=60"], "pymunk.iterations=60"),
+    (["compare", "housner-block", "--phi0-alpha", "0.5", "--engine", "pymunk", "--engine",
+      "mujoco", "--setting", "iterations=20"], "pymunk.iterations=20"),
+    (["compare", "housner-block", "--phi0-alpha", "0.5", "--engine", "pymunk", "--setting",
+      "mujoco.impratio=2"], "mujoco.impratio"),
+    (["map", "paper-symmetric", "--grid", "2x2", "--setting", "rtol=abc"], "rtol"),
+    (["map", "paper-symmetric", "--grid", "2x2", "--engine", "pymunk", "--setting",
+      "iterationz=3"], "iterationz"),
+    (["advise", "paper-symmetric", "--tolerance", "0.02", "--engine", "nope"], "--engine"),
+    (["stress", "--engine", "pymunk", "--engine", "nope"], "--engine"),
+]
+
+
+@pytest.mark.parametrize("argv,name", GRAMMAR_BAD, ids=[" ".join(a) for a, _ in GRAMMAR_BAD])
+def test_one_setting_grammar_refuses_before_running(capsys, tmp_path, monkeypatch, argv, name):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert out == "" and len(lines) == 1 and lines[0].startswith("rockbench: error: "), err
+    assert name in lines[0]
+
+
+def test_tradeoff_settings_reach_the_sweep_in_the_one_grammar(capsys, monkeypatch):
+    import rockbench.tradeoff as tradeoff_mod
+
+    seen = {}
+
+    def fake(scene, engines, **kwargs):
+        seen.update(kwargs, engines=engines)
+        raise rb.RockbenchError("stop here")
+
+    monkeypatch.setattr(tradeoff_mod, "tradeoff", fake)
+    assert main(["tradeoff", "paper-symmetric", "--engine", "pymunk", "--engine", "mujoco",
+                 "--setting", "pymunk.iterations=30,collision_slop=1e-4",
+                 "--setting", "mujoco.impratio=10"]) == 2
+    assert seen["engines"] == ["pymunk", "mujoco"]
+    assert seen["settings"] == [{"__engine__": "pymunk", "iterations": 30,
+                                 "collision_slop": 1e-4},
+                                {"__engine__": "mujoco", "impratio": 10.0}]
+
+
+def test_engine_option_repeatable_and_comma_lists_are_one_option(capsys, monkeypatch):
+    import rockbench.campaign as campaign
+
+    seen = {}
+    monkeypatch.setattr(campaign, "run_campaign",
+                        lambda out_dir="reports", **kw: seen.update(kw) or Path(out_dir))
+    monkeypatch.setattr("rockbench.cli._print_constants", lambda out: None)
+    assert main(["report", "--engine", "pymunk", "--engines", "mujoco,pymunk"]) == 0
+    assert seen["engines"] == ["pymunk", "mujoco"]
+
+
+@needs_pymunk
+def test_output_dt_follows_dt_in_python_as_on_the_command_line(capsys):
+    """One rule (EngineSettings): the default output interval follows a coarser dt, in
+    rb.run as with --dt; an explicit finer output_dt is still refused."""
+    scene = rb.load_scene("housner-block")
+    r = rb.run(scene, None, engine="pymunk", phi0=0.05, duration=1, dt=2e-3)
+    assert r.settings["output_dt"] == 2e-3 and len(r.history) == 501
+    d = cli_json(capsys, "run", "housner-block", "--engine", "pymunk", "--phi0", "0.05",
+                 "--duration", "1", "--dt", "2e-3")
+    assert d["settings"]["output_dt"] == 2e-3
+    with pytest.raises(rb.ParameterError, match="output_dt"):
+        rb.run(scene, None, engine="pymunk", phi0=0.05, duration=1, dt=2e-3, output_dt=1.5e-3)
