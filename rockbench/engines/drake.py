@@ -101,9 +101,9 @@ class DrakeSettings(EngineSettings):
     """
 
     solver: str = "cenic"
-    accuracy: float = 1e-3
+    accuracy: float = 1e-6
     contact_model: str = "point"
-    stiffness: float = 1e10
+    stiffness: float = 1e12
     dissipation: float = 50.0
     relaxation_time: float = 1e-3
     corner_radius: float = 1e-3
@@ -279,8 +279,9 @@ class DrakeBackend(EngineBackend):
         self._sim.AdvanceTo(self._k * self.settings.dt)
         if self._integrator is not None:
             n = self._integrator.get_num_steps_taken()
-            # the loop counts one step per call; count CENIC's internal steps instead
-            self.steps += n - self._internal - 1
+            # the loop counts one step per call (``steps``, the cost): count CENIC's internal
+            # steps instead
+            self.steps = getattr(self, "steps", 0) + n - self._internal - 1
             self._internal = n
 
     def _state(self) -> np.ndarray:
