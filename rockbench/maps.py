@@ -627,7 +627,11 @@ def _adaptive(sc, compute, axes: tuple[np.ndarray, np.ndarray], pulses: list[str
     As, Ws = axes
     na, nw = len(As), len(Ws)
     consts = info(sc)
-    crit = min(abs(consts["phi_cr_ccw"]), abs(consts["phi_cr_cw"])) / consts["alpha"]
+    # the smallest critical angle of any direction and device state [alpha] (a frame with
+    # intact tendons has none until they fracture)
+    crits = [abs(float(v)) for k, v in consts.items() if k.startswith("phi_cr_")
+             and v is not None and math.isfinite(float(v))]
+    crit = min(crits) / consts["alpha"] if crits else math.inf
     path = stored[0] if stored is not None else None
     known: dict[tuple, Any] = {}                 # (pulse, sign, i, j) -> row (namedtuple)
     frames: list[pd.DataFrame] = []

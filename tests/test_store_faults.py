@@ -360,3 +360,27 @@ def test_analytic_rows_keep_the_order_of_their_cells():
     random.Random(1).shuffle(cells)
     df = _analytic_rows(rb.load_scene("paper-asymmetric"), cells, "compiled", 3.0)
     assert [(r.pulse, r.sign, r.amplitude, r.frequency) for r in df.itertuples()] == cells
+
+
+def test_each_engine_cell_is_written_as_it_finishes(tmp_path, monkeypatch):
+    """Engine maps write every finished cell (not chunks of 64): each write holds one cell
+    before the merge at the end."""
+    import rockbench.maps as M
+
+    sizes = []
+    real = M._write_chunk
+    monkeypatch.setattr(M, "_write_chunk", lambda path, rows: (sizes.append(len(rows)),
+                                                              real(path, rows))[1])
+    df = run_map("paper-asymmetric", "pymunk", workers=1, store=tmp_path / "m.parquet",
+                 progress=False, grid=(3, 1), amplitude="2:8", frequency="8:8",
+                 pulses="symmetric+", tail=0.1)
+    assert (df["status"] == "ok").all()
+    assert sizes[:3] == [1, 1, 1] and sizes[3:] == [3]          # three cells, then the merge
+
+
+def test_adaptive_map_of_a_frame_with_tendons():
+    """A hybrid frame has no critical angle while its tendons hold (info gives None): the
+    adaptive map uses the smallest critical angle there is."""
+    df = run_map("paper-asymmetric-hybrid-eps1", adaptive=True, grid=(9, 9), progress=False,
+                 pulses="symmetric+", tail=0.5)
+    assert len(df) == 81 and df.attrs["cells_run"] + df.attrs["inferred"] == 81
