@@ -73,11 +73,14 @@ def test_case_error_near_the_boundary_and_records_outside_their_band():
             "near_boundary": True}
     assert math.isnan(T.case_error(near))
     assert T.case_error({**near, "near_boundary": False}) == math.inf
-    # a record inside its band is judged by its peak error; outside it, it is not ok
-    rec = {"status": "ok", "kind": "record", "peak_rel_error": 0.01, "verdict_agrees": True,
-           "in_band": True}
-    assert T.case_error(rec) == pytest.approx(0.01)
-    assert T.case_error({**rec, "in_band": False}) == math.inf
+    # a record is judged by the distance of its peak to the analytic model's own sensitivity
+    # band: inside it, 0 (however far from the unperturbed peak); outside, the distance
+    rec = {"status": "ok", "kind": "record", "peak_rel_error": 0.24, "verdict_agrees": True,
+           "in_band": True, "band_distance": 0.0}
+    assert T.case_error(rec) == 0.0
+    out = {**rec, "peak_rel_error": 0.65, "in_band": False, "band_distance": 0.114}
+    assert T.case_error(out) == pytest.approx(0.114)
+    assert T.case_error({**out, "band_distance": -0.03}) == pytest.approx(0.03)   # below it
 
 
 def test_self_consistency_shrinks_with_dt_for_a_converging_engine():
