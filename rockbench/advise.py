@@ -368,11 +368,11 @@ class Advice:
                                                                   rec["settings"]),
             "ranking": clean(self.ranking), "considered": self.considered,
             "error_definition": "worst over a part of the evidence of |peak error| (surviving "
-                                "pulses away from the boundary, records) and eta error (free "
-                                "rocking); inf if a run is not ok, its overturning verdict is "
-                                "wrong away from the boundary or a record's peak is outside "
-                                "the analytic sensitivity band; near-boundary cells: verdicts "
-                                "reported, not counted",
+                                "pulses away from the boundary), the relative distance of a "
+                                "record's peak to the analytic sensitivity band (0 inside) and "
+                                "eta error (free rocking); inf if a run is not ok or its "
+                                "overturning verdict is wrong away from the boundary; "
+                                "near-boundary cells: verdicts reported, not counted",
             "cost_definition": "steady-state process CPU s per simulated s, median of repeats "
                                "(the model build per run and the warm-up per process "
                                "measured apart: build_cpu_s, warmup_cpu_s)",
