@@ -119,7 +119,9 @@ def _job_label(job: Mapping[str, Any]) -> str:
     """``"<scene> symm+ A=3 W=4"``, ``"<scene> free rocking"``, ``"<engine> dt=0.001 s"``."""
     if job["kind"] == "dt":
         return f"{job['engine']} dt={job['dt']:g} s"
-    return f"{job['scene']} {motion_label(job.get('motion'))}"
+    from .campaign_maps import scene_label
+
+    return f"{scene_label(job['scene'])} {motion_label(job.get('motion'))}"
 
 
 def _run_job(job: dict[str, Any]) -> dict[str, Any]:
@@ -252,6 +254,12 @@ def _engine_versions() -> dict[str, str]:
                         else f"unavailable: {r.get('reason', '')}") for r in engine_info()}
 
 
+def _scene_label(ref: Any) -> str:
+    from .campaign_maps import scene_label
+
+    return scene_label(ref)
+
+
 def _hybrid(scenes) -> dict[str, bool]:
     """Scene name -> whether it has devices (tendons, dampers)."""
     from .scene import load_scene
@@ -269,7 +277,9 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                  records_dir: str | os.PathLike | None = None, quick: bool = False,
                  progress: bool = True, store: str | os.PathLike | None = None,
                  executor: str = "process", dask_address: str | None = None,
-                 workers: int | None = None, full: bool = False) -> Path:
+                 workers: int | None = None, full: bool = False,
+                 scenes: Sequence[Any] | None = None,
+                 plan: str | os.PathLike | Mapping[str, Any] | None = None) -> Path:
     """Run the default campaign (module docstring) and write its report; return the path of
     ``out_dir/index.html``.
 
@@ -297,6 +307,11 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         the stability sweep of every engine (:mod:`rockbench.campaign_choice`; the default runs
         its fast form); the default keeps ``make report`` within its budget. Everything is
         kept in the store and reused.
+    scenes : the structures to report on (built-in names, TOML paths or Scenes; the first one
+        is the structure the decision is about): the campaign's plan is derived from them
+        (:func:`rockbench.campaign_plan.plan_for_scenes`). Default: the paper's plan.
+    plan : a plan file (``kind = "campaign-plan"``, :func:`rockbench.campaign_plan.load_plan`)
+        or a plan mapping; overrides ``scenes``.
     """
     from .engines import available_backends
 
@@ -311,9 +326,19 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     avail = set(available_backends())
     missing = [n for n in names if n not in avail]
     names = [n for n in names if n in avail]
-    plan = campaign_plan(quick)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if isinstance(plan, Mapping):
+        plan = dict(plan)
+    elif plan is not None:
+        from .campaign_plan import load_plan
+        plan = load_plan(plan, quick=quick, folder=out / "scenes")
+    elif scenes:
+        from .campaign_plan import plan_for_scenes
+        plan = plan_for_scenes(scenes, quick=quick, folder=out / "scenes")
+    else:
+        plan = campaign_plan(quick)
+    paper = plan["scenes"] == campaign_plan(quick)["scenes"]
     store_dir = Path(store) if store is not None else out / "store"
     fingerprint = code_fingerprint()
     cache = store_dir / fingerprint / "comparisons"
@@ -382,12 +407,12 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
 
     # 3b: overturning maps at the paper's resolution (paper Figs. 4-7) ------------------------
     t = time.perf_counter()
-    from .campaign_maps import ANALYTIC_GRID, ENGINE_AXES, run_maps
+    from .campaign_maps import run_maps
 
     maps = run_maps(names, store_dir / fingerprint / "maps", full=full, quick=quick,
                     measured=Path(out_dir) / "engine-maps", progress=progress,
                     workers=workers,
-                    scheduler=dask_address if executor == "dask" else None)
+                    scheduler=dask_address if executor == "dask" else None, maps=plan["maps"])
     timings["maps"] = time.perf_counter() - t
 
     # 3c: choosing a modelling approach (work-precision, advice, stability) -----------------
@@ -395,7 +420,9 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     from .campaign_choice import run_choice
 
     choice = run_choice(names, store_dir, quick=quick, full=full, workers=workers,
-                        progress=progress)
+                        progress=progress, scene=plan["choice_scene"], dts=plan["choice_dts"],
+                        stress_scene=plan.get("stress_scene"),
+                        stress_hybrid=plan.get("stress_hybrid_scene"))
     timings["choice"] = time.perf_counter() - t
 
     # 5: records ----------------------------------------------------------------------------
@@ -422,7 +449,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     for name, df in files.items():
         df.to_csv(out / name, index=False)
     lines = campaign_conclusion(engines_tab, metrics, eta_summary, speed, omap, records,
-                                hybrid=_hybrid(plan["scenes"]), map_scene=plan["map_scene"])
+                                hybrid=_hybrid(plan["scenes"]),
+                                map_scene=_scene_label(plan["map_scene"]))
     # the recommendation first (measured advice, CPU time), then the evidence; the median-
     # based "closest" and the load-dependent "fastest" headlines give way to it
     lines = choice["words"] + maps["words"] + [
@@ -438,7 +466,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
 
     at = next((i for i, sec in enumerate(sections) if sec[0] == "settings-section"),
               len(sections))
-    g = ANALYTIC_GRID["grid"]
+    mp = plan["maps"]
+    g = mp["analytic_grid"]
     from .report.choice_page import choice_html
 
     sections.insert(at, ("choice-section", "Choosing a modelling approach",
@@ -446,26 +475,28 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     at += 1
     sections.insert(at, ("maps-section", "Overturning maps (paper Figs. 4-7)", maps_html(
         maps, out / "figures",
-        analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {ANALYTIC_GRID['amplitude']}, "
-                      f"W in {ANALYTIC_GRID['frequency']}, pulse window + 10 s",
-        axes=f"A in {ENGINE_AXES['amplitude']}, W in {ENGINE_AXES['frequency']}, pulse window "
-             f"+ {ENGINE_AXES['tail']:g} s")))
+        analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
+                      f"W in {mp['analytic_frequency']}, pulse window + 10 s",
+        axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
+             f"+ {mp['engine_tail']:g} s")))
     # the decision first (report/decision.py): the advice, one row per engine, work-precision
-    from .campaign_choice import CHOICE_SCENE
     from .report.choice_page import work_precision_html
     from .report.decision import decision_html
 
     sections.insert(0, ("decision-section", "Which engine and settings", decision_html(
-        choice["advice"], scene=CHOICE_SCENE, agreement=maps["agreement"],
+        choice["advice"], scene=choice.get("scene", "the structure"),
+        structure=plan.get("description", ""), agreement=maps["agreement"],
         eta_summary=eta_summary, breaks=choice.get("breaks"),
-        work_precision_html=work_precision_html(choice, out / "figures", scene=CHOICE_SCENE))))
+        work_precision_html=work_precision_html(choice, out / "figures",
+                                                scene=choice.get("scene", "the structure")))))
     timings["report"] = time.perf_counter() - t
     total = time.perf_counter() - t_start
     cpu = sum(float(p.get("cpu_s", 0.0)) for p in payloads + dt_payloads)
     sections.append(("runtime-section", "Run time",
                      P.runtime_html(timings, total, workers or cpu_count(), cpu)))
     path = out / "index.html"
-    path.write_text(P.render(sections, quick=quick, with_records=bool(len(records))),
+    path.write_text(P.render(sections, quick=quick, with_records=bool(len(records)),
+                             about=None if paper else plan.get("description", "")),
                     encoding="utf-8")
     return path
 

@@ -20,13 +20,16 @@ import pandas as pd
 __all__ = ["CHOICE_SCENE", "CHOICE_DTS", "run_choice", "recommendation"]
 
 #: Scene and time steps [s] of the report's work-precision sweep.
-CHOICE_SCENE = "paper-asymmetric"
-CHOICE_DTS = (2e-3, 1e-3, 5e-4)
+from .sweep.cases import campaign_plan as _plan  # noqa: E402
+
+CHOICE_SCENE = _plan()["choice_scene"]     # scenarios/paper-plan.toml
+CHOICE_DTS = _plan()["choice_dts"]
 
 
 def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                full: bool = False, workers: int | None = None,
-               progress: bool = False) -> dict[str, Any]:
+               progress: bool = False, scene: Any = None, dts: Sequence[float] | None = None,
+               stress_scene: Any = None, stress_hybrid: Any = None) -> dict[str, Any]:
     """{"tradeoff": table, "advice": frame, "stress": table or None, "breaks": the first
     breaking point of each engine along each axis (:func:`rockbench.stress.breaking_points`)
     or None, "words": [str]}: the
@@ -42,19 +45,23 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                 "breaks": None, "words": []}
     from .validation import validation_set
 
-    dts = CHOICE_DTS[:2] if quick else CHOICE_DTS
-    cases = validation_set(load_scene(CHOICE_SCENE), size="default" if full else "quick")
-    t = tradeoff(CHOICE_SCENE, names, dts=dts, repeat=1, cases=cases,
+    scene = CHOICE_SCENE if scene is None else scene
+    dts = tuple(CHOICE_DTS if dts is None else dts)
+    dts = dts[:2] if quick else dts
+    cases = validation_set(load_scene(scene), size="default" if full else "quick")
+    t = tradeoff(scene, names, dts=dts, repeat=1, cases=cases,
                  self_consistency="none", workers=workers, store=store / "tradeoff",
                  progress=progress)
     advice = advice_for_report(t.table)
-    st = None if quick else stress(names, full=full, workers=workers, progress=progress).table
+    st = None if quick else stress(names, full=full, workers=workers, progress=progress,
+                                   scene=stress_scene, hybrid=stress_hybrid).table
+    label = getattr(load_scene(scene), "name", str(scene))
     return {"tradeoff": t.table, "advice": advice, "stress": st, "stress_full": full,
-            "breaks": breaking_points(st) if st is not None else None,
-            "words": recommendation(advice)}
+            "breaks": breaking_points(st, stress_scene) if st is not None else None,
+            "words": recommendation(advice, label), "scene": label}
 
 
-def recommendation(advice: pd.DataFrame) -> list[str]:
+def recommendation(advice: pd.DataFrame, scene: str = CHOICE_SCENE) -> list[str]:
     """The report's headline: per tolerance, the recommended engine and setting (rank 1 when
     it meets the tolerance), then the others in order, and those that cannot reach it."""
     lines = []
@@ -68,7 +75,7 @@ def recommendation(advice: pd.DataFrame) -> list[str]:
             b = meets.iloc[0]
             ho = b.get("held_out_worst_error", float("nan"))
             ho_text = (f", {100 * ho:.2f} % on the held-out cases" if ho == ho else "")
-            text = (f"Within {pct} of the analytic model on {CHOICE_SCENE} (worst error over "
+            text = (f"Within {pct} of the analytic model on {scene} (worst error over "
                     f"the choice part of the evidence, confirmed on its held-out part): use "
                     f"{b['engine']} with {b['setting']} "
                     f"(worst error {100 * b['worst_error']:.2f} %{ho_text}, "
@@ -91,7 +98,7 @@ def recommendation(advice: pd.DataFrame) -> list[str]:
                     f"{r['cpu_per_sim_s']:.3g} CPU s/s)" for _, r in meets.iloc[1:].iterrows())
             lines.append(text + ".")
         else:
-            lines.append(f"No engine reaches {pct} on {CHOICE_SCENE} at the time steps tried.")
+            lines.append(f"No engine reaches {pct} on {scene} at the time steps tried.")
         miss = g[g["status"] != "meets"]
         if len(miss):
             lines.append(f"Not within {pct}: " + "; ".join(

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
@@ -29,93 +29,132 @@ from .maps import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement, mark_nea
 
 __all__ = ["ANALYTIC_SCENES", "ANALYTIC_GRID", "ENGINE_SCENES", "ENGINE_GRIDS", "run_maps"]
 
-#: Scenes of the analytic maps and their grid (the paper's resolution).
-ANALYTIC_SCENES = ("paper-symmetric", "paper-asymmetric", "paper-asymmetric-hybrid",
-                   "paper-asymmetric-hybrid-eps2", "paper-asymmetric-hybrid-eps1")
-ANALYTIC_GRID = dict(grid=(100, 100), amplitude="0.5:8", frequency="0.5:10", pulses="all")
+def _paper_maps() -> dict[str, Any]:
+    from .sweep.cases import campaign_plan
+
+    return campaign_plan()["maps"]
+
+
+_P = _paper_maps()
+#: The paper plan's analytic maps: scenes and grid (the paper's resolution); every value comes
+#: from ``scenarios/paper-plan.toml`` (``[campaign.maps]``), another plan brings its own.
+ANALYTIC_SCENES = _P["analytic_scenes"]
+ANALYTIC_GRID = dict(grid=_P["analytic_grid"], amplitude=_P["analytic_amplitude"],
+                     frequency=_P["analytic_frequency"], pulses="all")
 #: Scenes of the engine maps (a free-standing and a fracturing hybrid frame).
-ENGINE_SCENES = ("paper-asymmetric", "paper-asymmetric-hybrid-eps1")
+ENGINE_SCENES = _P["engine_scenes"]
 #: Engine-map cells: A from 1 (below it the frame never uplifts), W from 1, and 3 s of free
 #: rocking after the pulse window (the analytic overlay uses the same cells and length).
-ENGINE_AXES = dict(amplitude="1:8", frequency="1:10", pulses="all", tail=3.0)
+ENGINE_AXES = dict(amplitude=_P["engine_amplitude"], frequency=_P["engine_frequency"],
+                   pulses="all", tail=_P["engine_tail"])
 #: Grid of the measured engine maps (every engine, both scenes): run by ``full=True``
 #: (``rockbench report --full``) into ``measured`` (``reports/engine-maps``, kept in the
 #: repository), and reused by the default report when :func:`rockbench.maps.reuse_map`
 #: reproduces sample cells of each on the current code.
-MEASURED_GRID = (12, 12)
+MEASURED_GRID = _P["measured_grid"]
 #: Grid per (engine speed class, scene) computed by the default report when no verified
 #: measured map exists (``make report`` stays within its 10-minute budget on 2 cores).
-ENGINE_GRIDS = {"fast": {"paper-asymmetric": (6, 6)}, "slow": {}}
+ENGINE_GRIDS = {"fast": dict(_P["fast_grids"]), "slow": {}}
 #: Engines fast enough for the larger default grids (real-time factor >= 20 through rockbench).
 FAST_ENGINES = ("pymunk", "mujoco")
 
 
-def _engine_map(sc: str, eng: str, store: Path, measured: Path | None, *, full: bool,
-                quick: bool, run: dict) -> tuple[pd.DataFrame | None, tuple[int, int], str]:
+def scene_label(ref: Any) -> str:
+    """A scene's label in file names and on the page: a built-in name as it is, a TOML path by
+    its file's stem, a Scene by its name."""
+    if isinstance(ref, (str, Path)) and (str(ref).endswith(".toml") or "/" in str(ref)):
+        return Path(ref).stem
+    return str(getattr(ref, "name", ref))
+
+
+def _axes(maps: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(analytic grid, engine axes) of a plan's maps part."""
+    return (dict(grid=tuple(maps["analytic_grid"]), amplitude=maps["analytic_amplitude"],
+                 frequency=maps["analytic_frequency"], pulses="all"),
+            dict(amplitude=maps["engine_amplitude"], frequency=maps["engine_frequency"],
+                 pulses="all", tail=maps["engine_tail"]))
+
+
+def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: bool,
+                quick: bool, run: dict, maps: Mapping[str, Any]
+                ) -> tuple[pd.DataFrame | None, tuple[int, int], str]:
     """One engine's map of ``sc``: (map or None, grid, where it comes from)."""
+    axes = _axes(maps)[1]
+    lab = scene_label(sc)
     if quick:
         g = (4, 4)
-        return (run_map(sc, eng, store=store / f"{sc}_{eng}_4x4.parquet",
-                        **dict(ENGINE_AXES, grid=g), **run), g, "computed now")
-    cells = dict(ENGINE_AXES, grid=MEASURED_GRID)
+        return (run_map(sc, eng, store=store / f"{lab}_{eng}_4x4.parquet",
+                        **dict(axes, grid=g), **run), g, "computed now")
+    mg = tuple(maps["measured_grid"])
+    cells = dict(axes, grid=mg)
     why = "no measured map"
     if measured is not None:
-        path = measured / f"{sc}_{eng}_{MEASURED_GRID[0]}x{MEASURED_GRID[1]}.parquet"
+        path = measured / f"{lab}_{eng}_{mg[0]}x{mg[1]}.parquet"
         df, why = reuse_map(path, sc, eng, **cells)
         if df is not None:
-            return df, MEASURED_GRID, why
+            return df, mg, why
         if full:
             if path.exists() and "lacks" not in why:      # stale: measure again
                 shutil.rmtree(path)
             df = run_map(sc, eng, store=path, keyed_by_code=False, **cells, **run)
-            return df, MEASURED_GRID, f"measured now ({why})"
-    cls = "fast" if eng in FAST_ENGINES else "slow"
-    g = ENGINE_GRIDS[cls].get(sc)
+            return df, mg, f"measured now ({why})"
+    g = maps["fast_grids"].get(lab) if eng in FAST_ENGINES else None
     if g is None:
         return None, (0, 0), why
-    return (run_map(sc, eng, store=store / f"{sc}_{eng}_{g[0]}x{g[1]}.parquet",
-                    **dict(ENGINE_AXES, grid=g), **run), g, f"computed now ({why})")
+    g = tuple(g)
+    return (run_map(sc, eng, store=store / f"{lab}_{eng}_{g[0]}x{g[1]}.parquet",
+                    **dict(axes, grid=g), **run), g, f"computed now ({why})")
 
 
 def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: bool = False,
              measured: Path | None = None, progress: bool = True, workers: int | None = None,
-             scheduler: str | None = None) -> dict[str, Any]:
+             scheduler: str | None = None, maps: Mapping[str, Any] | None = None
+             ) -> dict[str, Any]:
     """Run the map part; return {"analytic": {scene: frame}, "engine": {(scene, engine):
     frame}, "overlay_ref": {(scene, grid): frame}, "agreement": frame, "words": [str],
-    "provenance": [str]}. ``measured``: the folder of the measured engine maps
-    (:data:`MEASURED_GRID`), reused when verified, (re)measured with ``full``."""
+    "provenance": [str]}. ``measured``: the folder of the measured engine maps (the plan's
+    ``measured_grid``), reused when verified, (re)measured with ``full``. ``maps``: the plan's
+    maps part (default: the paper plan's, ``scenarios/paper-plan.toml``); scenes are keyed by
+    their label (:func:`scene_label`)."""
+    maps = dict(_paper_maps() if maps is None else maps)
+    grid_a, axes = _axes(maps)
     run = dict(progress=progress, workers=workers, scheduler=scheduler)
     out: dict[str, Any] = {"analytic": {}, "engine": {}, "overlay_ref": {}, "words": [],
                            "provenance": []}
-    scenes = ANALYTIC_SCENES[1:2] if quick else ANALYTIC_SCENES
-    grid = dict(ANALYTIC_GRID, grid=(12, 12)) if quick else ANALYTIC_GRID
+    scenes = list(maps["analytic_scenes"])
+    eng_scenes = list(maps["engine_scenes"])
+    if quick:
+        scenes = [s for s in scenes if s in eng_scenes[:1]] or scenes[:1]
+        grid_a = dict(grid_a, grid=(12, 12))
     for sc in scenes:
-        out["analytic"][sc] = run_map(sc, "analytic", store=store / f"{sc}_analytic.parquet",
-                                      **grid, **run)
+        lab = scene_label(sc)
+        out["analytic"][lab] = run_map(sc, "analytic", store=store / f"{lab}_analytic.parquet",
+                                       **grid_a, **run)
     rows = []
-    for sc in (ENGINE_SCENES[:1] if quick else ENGINE_SCENES):
+    for sc in (eng_scenes[:1] if quick else eng_scenes):
+        lab = scene_label(sc)
         for eng in engines:
             if eng == "analytic":
                 continue
             df, g, source = _engine_map(sc, eng, store, measured, full=full, quick=quick,
-                                        run=run)
-            out["provenance"].append(f"{eng} on {sc}: " + (
+                                        run=run, maps=maps)
+            out["provenance"].append(f"{eng} on {lab}: " + (
                 f"{g[0]}x{g[1]}x4 cells, {source}" if df is not None else
                 f"no map ({source}; `rockbench report --full` measures it)"))
             if df is None:
                 continue
-            cells = dict(ENGINE_AXES, grid=g)
-            key = (sc, g)
+            cells = dict(axes, grid=g)
+            key = (lab, g)
             if key not in out["overlay_ref"]:
                 out["overlay_ref"][key] = mark_near_boundary(run_map(
-                    sc, "analytic", store=store / f"{sc}_analytic_{g[0]}x{g[1]}.parquet",
-                    **cells, **run), sc, tail=ENGINE_AXES["tail"])
+                    sc, "analytic", store=store / f"{lab}_analytic_{g[0]}x{g[1]}.parquet",
+                    **cells, **run), sc, tail=axes["tail"])
             ref = out["overlay_ref"][key]
-            out["engine"][(sc, eng)] = df
+            out["engine"][(lab, eng)] = df
             ag = map_agreement(ref, df)
             shift = ag["shift"]["shift"].dropna()
             words = describe_shift(ag["shift"], eng)
-            rows.append({"scene": sc, "backend": eng, "grid": f"{g[0]}x{g[1]}x4",
+            rows.append({"scene": lab, "backend": eng, "grid": f"{g[0]}x{g[1]}x4",
                          "cells": ag["n"], "agree_fraction": ag["fraction"],
                          "kappa": ag["kappa"],
                          "engine_overturns_analytic_survives": ag["b_overturns_a_survives"],
@@ -127,7 +166,7 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
                          "near_boundary": ag["near_boundary"],
                          "disagree_near_boundary": ag["disagree_near_boundary"],
                          "disagree_away": ag["disagree_away"], "in_words": words})
-            out["words"].append(f"{eng} on {sc} ({g[0]}x{g[1]}x4 cells): "
+            out["words"].append(f"{eng} on {lab} ({g[0]}x{g[1]}x4 cells): "
                                 f"{100 * ag['fraction']:.1f} % of the verdicts agree with the "
                                 f"analytic map (Cohen's kappa {ag['kappa']:.3f}); "
                                 f"{ag['near_boundary']} cells lie within "

@@ -158,22 +158,24 @@ def _point(axis: str, v: float, base: Any = _BASE, hybrid: Any = _HYBRID) -> Str
 
 
 def stress_points(full: bool = False, axes: Sequence[str] | None = None, *,
-                  scene: Any = None) -> list[StressPoint]:
+                  scene: Any = None, hybrid: Any = None) -> list[StressPoint]:
     """The points of the fast (default) or ``full`` form, the base scene first (as the ``base``
     axis, or ``paper`` for the paper's frame: free rocking from 0.5 alpha and the A = 2.5,
     W = 3 pulse).
 
     ``scene``: the base (a name, a TOML path or a Scene; default the paper's asymmetric frame,
     whose device axes start from the paper's hybrid frame). A user's scene is its own base;
-    the device axes run only when it has tendons and dampers, and the frame axes only on a
-    frame; asking for an axis the scene cannot have is an error."""
+    the device axes start from ``hybrid`` (default: the scene itself when it has tendons and
+    dampers, else they do not run), the frame axes run only on a frame; asking for an axis the
+    scene cannot have is an error."""
     from .scene.scene import load_scene
 
-    if scene is None:
-        base, hybrid, label = _BASE, _HYBRID, "paper"
+    if scene is None or (scene == _BASE and hybrid in (None, _HYBRID)):
+        scene, base, hybrid, label = None, _BASE, _HYBRID, "paper"
     else:
         sc = load_scene(scene)
-        base, hybrid, label = scene, (scene if sc.has_devices else None), "base"
+        hybrid = hybrid if hybrid is not None else (scene if sc.has_devices else None)
+        base, label = scene, "base"
         frame = hasattr(sc.structure, "column_height_left")
     names = list(AXES) if axes is None else list(axes)
     for a in names:
@@ -408,7 +410,7 @@ class Stress:
 def stress(engines: Sequence[str] | None = None, *, full: bool = False,
            axes: Sequence[str] | None = None, points: Sequence[StressPoint] | None = None,
            executor: str = "process", workers: int | None = None,
-           progress: bool = False, scene: Any = None) -> Stress:
+           progress: bool = False, scene: Any = None, hybrid: Any = None) -> Stress:
     """Run every point (:func:`stress_points` from ``scene``, default the paper's frame; or
     ``points``) with every engine (default: the available engines) through the one executor;
     return a :class:`Stress`."""
@@ -422,7 +424,8 @@ def stress(engines: Sequence[str] | None = None, *, full: bool = False,
     for n in names:
         ok, why = get_backend(n).available()
         (usable.append(n) if ok else unavailable.__setitem__(n, why))
-    pts = list(points) if points is not None else stress_points(full, axes, scene=scene)
+    pts = (list(points) if points is not None
+           else stress_points(full, axes, scene=scene, hybrid=hybrid))
     items = [(f"{i}", (n, p)) for i, (n, p) in enumerate((n, p) for p in pts for n in usable)]
     rows: dict[str, dict] = {}
     execute(run_point, items, on_result=lambda k, r: rows.__setitem__(k, r), crashed=_crashed,
@@ -439,7 +442,7 @@ def breaking_points(table: pd.DataFrame, scene: Any = None) -> pd.DataFrame:
     axis, side ("below" / "above" the base value), value, class, reason); points outside the
     model's validity are skipped."""
     bad = ("off", "diverged", "invalid")
-    values = PAPER_VALUES if scene is None else base_values(scene)
+    values = PAPER_VALUES if scene in (None, _BASE) else base_values(scene)
     out = []
     for (eng, axis), g in table.groupby(["engine", "axis"], sort=False):
         if axis in ("paper", "base"):

@@ -18,11 +18,14 @@ from .tables import CAMPAIGN_COLUMNS
 __all__ = ["page_sections", "runtime_html", "render", "fracture_html", "band_summary_html"]
 
 
-def render(sections, *, quick: bool, with_records: bool) -> str:
-    """The whole page (title, subtitle, sections)."""
+def render(sections, *, quick: bool, with_records: bool, about: str | None = None) -> str:
+    """The whole page (title, subtitle, sections). ``about``: the structures of a user's
+    campaign (None: the paper's frames)."""
+    what = (f"Your structures ({about})" if about else
+            "The paper's rocking frames, free-standing and hybrid,")
     return H.render_page("rockbench: physics engines against the analytic rocking model",
-                         sections, subtitle="The paper's rocking frames, free-standing and "
-                         "hybrid, under Ricker pulses" + (" and records" if with_records else "")
+                         sections, subtitle=what + " under Ricker pulses"
+                         + (" and records" if with_records else "")
                          + ": how far each engine stands from the analytic model, and at what "
                          "cost." + (" (quick campaign)" if quick else ""))
 
@@ -88,6 +91,12 @@ def fracture_html(frac, units) -> str:
             + H.html_table(frac, cols, units=units, table_id="fracture", scroll=True))
 
 
+def _label(ref) -> str:
+    """A scene's label on the page: a built-in name, or a scene file's stem."""
+    text = str(ref)
+    return text.replace("\\", "/").rsplit("/", 1)[-1].removesuffix(".toml")
+
+
 def _details(summary: str, inner: str, *, open_: bool = False) -> str:
     """Long evidence, collapsed under a one-line summary."""
     return (f'<details class="evidence"{" open" if open_ else ""}><summary>{H.escape(summary)}'
@@ -135,6 +144,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
         ps = [p for p in pulses if p["job"]["scene"] == scene]
         if not ps:
             continue
+        scene = _label(scene)
         panels = [(p["label"].replace(scene + " ", ""),
                    {k: F.as_trace(v) for k, v in p["traces"].items()}) for p in ps]
         bands = [(p["band"]["low"], p["band"]["high"]) if p.get("band") else None
@@ -219,7 +229,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
         sp.append(H.figure_html(
             F.plot_speed_accuracy(rows, error="nrmse",
                                   speeds=("real_time_factor", "run_real_time_factor"),
-                                  title=f"Speed against accuracy: {dc['scene']}, {dc['shape']} "
+                                  title=f"Speed against accuracy: {_label(dc['scene'])}, {dc['shape']} "
                                         f"pulse {dc['sign']:+d}, A = {dc['A']:g}, "
                                         f"W = {dc['W']:g}"),
             "nrmse [-] against the real-time factor [-] for each engine at the time steps "
@@ -237,7 +247,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     mp = []
     if len(omap):
         mp.append(H.figure_html(
-            F.plot_overturn_maps(omap, title=f"Overturning map: {plan['map_scene']}, positive "
+            F.plot_overturn_maps(omap, title=f"Overturning map: {_label(plan['map_scene'])}, positive "
                                              f"symmetric Ricker pulses"),
             "Overturning verdicts on the (W, A) plane, W = omega_g / p [-], "
             "A = a_g / (g tan alpha) [-]: filled squares overturn, open circles survive; a "
@@ -264,7 +274,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     # settings
     items = [("engines", ", ".join(names)),
              ("engines not available", ", ".join(missing) or "none"),
-             ("scenes", ", ".join(plan["scenes"])),
+             ("scenes", ", ".join(map(str, plan["scenes"]))),
              ("pulse (A, W) points", ", ".join(f"({a:g}, {w:g})"
                                                for a, w in plan["pulse_points"])),
              ("pulse shapes", ", ".join(f"{s} {g:+d}" for s, g in plan["pulse_shapes"])),

@@ -44,7 +44,8 @@ from .store import key
 
 __all__ = ["CASE_KEYS", "normalize_case", "case_id", "flatten_case", "case_label", "pulse_grid",
            "scene_name", "load_case_scene",
-           "FreeCase", "PulseCase", "Catalogue", "catalogue", "campaign_plan", "CHECK_SCENE"]
+           "FreeCase", "PulseCase", "Catalogue", "catalogue", "campaign_plan", "read_plan",
+           "CHECK_SCENE"]
 
 #: The keys a case may have (every other key is an error).
 CASE_KEYS = ("scene", "overrides", "engine", "settings", "motion", "phi0", "duration")
@@ -376,21 +377,58 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
             "record_duration": (float(c["record_duration"]) if "record_duration" in c
                                 else None),
             "record_frames": dict(c["record_frames"]),
-            "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float))}
-    q = c["quick"]
-    quick = dict(full, scenes=tuple(q["scenes"]), pulse_points=_pairs(q["pulse_points"]),
-                 pulse_shapes=_pairs(q["pulse_shapes"], (str, int)),
-                 pulse_tail=float(q["pulse_tail"]), map_A=tuple(map(float, q["map_A"])),
-                 map_W=tuple(map(float, q["map_W"])),
-                 map_duration_tail=float(q["map_duration_tail"]),
-                 dt_sweep=tuple(map(float, q["dt_sweep"])), dt_case=dict(c["dt_case"]),
-                 dt_tail=float(q["dt_tail"]), free_duration=float(q["free_duration"]),
-                 max_records=int(q["max_records"]), record_tail=float(q["record_tail"]),
+            "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float)),
+            "choice_scene": str(c.get("choice_scene", c["map_scene"])),
+            "choice_dts": tuple(map(float, c.get("choice_dts", (2e-3, 1e-3, 5e-4)))),
+            "stress_scene": c.get("stress_scene"),
+            "stress_hybrid_scene": c.get("stress_hybrid_scene"),
+            "maps": _maps_plan(c.get("maps", {}), c),
+            "description": str(c.get("description", ""))}
+    q = c.get("quick", {})
+    quick = dict(full, scenes=tuple(q.get("scenes", full["scenes"][:2])),
+                 pulse_points=_pairs(q.get("pulse_points", full["pulse_points"][:1])),
+                 pulse_shapes=_pairs(q.get("pulse_shapes", full["pulse_shapes"][:1]),
+                                     (str, int)),
+                 pulse_tail=float(q.get("pulse_tail", 2.0)),
+                 map_A=tuple(map(float, q.get("map_A", full["map_A"][::4]))),
+                 map_W=tuple(map(float, q.get("map_W", full["map_W"][2:3]))),
+                 map_duration_tail=float(q.get("map_duration_tail", 2.0)),
+                 dt_sweep=tuple(map(float, q.get("dt_sweep", full["dt_sweep"][1:3]))),
+                 dt_case=dict(c["dt_case"]),
+                 dt_tail=float(q.get("dt_tail", 2.0)),
+                 free_duration=float(q.get("free_duration", 3.0)),
+                 max_records=int(q.get("max_records", 1)),
+                 record_tail=float(q.get("record_tail", 2.0)),
                  record_duration=None,
                  record_frames=dict(c["record_frames"]),
                  fracture_cases=_pairs(q.get("fracture_cases", ()),
                                        (str, str, int, float, float)))
     return full, quick
+
+
+def _maps_plan(m: dict[str, Any], c: dict[str, Any]) -> dict[str, Any]:
+    """The maps part of a plan: analytic maps (scenes, grid, A and W ranges) and engine maps
+    (scenes, ranges, free-rocking tail [s], measured grid, the fast engines' grid per scene)."""
+    scenes = list(c["scenes"])
+    return {"analytic_scenes": tuple(m.get("analytic_scenes", scenes)),
+            "analytic_grid": tuple(int(v) for v in m.get("analytic_grid", (100, 100))),
+            "analytic_amplitude": str(m.get("analytic_amplitude", "0.5:8")),
+            "analytic_frequency": str(m.get("analytic_frequency", "0.5:10")),
+            "engine_scenes": tuple(m.get("engine_scenes", scenes[:1])),
+            "engine_amplitude": str(m.get("engine_amplitude", "1:8")),
+            "engine_frequency": str(m.get("engine_frequency", "1:10")),
+            "engine_tail": float(m.get("engine_tail", 3.0)),
+            "measured_grid": tuple(int(v) for v in m.get("measured_grid", (12, 12))),
+            "fast_grids": {k: tuple(int(x) for x in v)
+                           for k, v in m.get("fast_grids", {scenes[0]: (6, 6)}).items()}}
+
+
+def read_plan(data: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(plan, quick plan) of a plan file's data (``kind = "campaign-plan"``; the plan in its
+    ``[campaign]`` table or at the top level). Keys as in ``scenarios/paper-plan.toml``."""
+    c = dict(data.get("campaign", data))
+    c.setdefault("description", data.get("description", ""))
+    return _plans(c)
 
 
 @functools.lru_cache(maxsize=1)
@@ -400,7 +438,9 @@ def catalogue() -> Catalogue:
                         .read_text(encoding="utf-8"))
     x = data["cross_engine"]
     s, o = x["survive"], x["overturn"]
-    full, quick = _plans(data["campaign"])
+    full, quick = read_plan(tomllib.loads(
+        (resources.files("rockbench") / "scenarios" / "paper-plan.toml").read_text(
+            encoding="utf-8")))
     return Catalogue(
         pulses=_pairs(x["pulses"], (str, int)), free_phi0=float(x["free_phi0"]),
         nrmse_window=float(x["nrmse_window"]),
