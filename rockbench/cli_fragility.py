@@ -2,8 +2,9 @@
 only; the work is :mod:`rockbench.fragility`.
 
     rockbench fragility SCENE --records DIR|FILE|NAME ... [--engine E ...] [--scales LO:HI:N]
-                        [--intensity pga|pgv] [--boot N] [--seed S] [--setting [ENGINE.]K=V ...]
-                        [--set KEY=VALUE ...] [--json] [--store DIR] [--workers N | --scheduler ADDR]
+                        [--intensity pga|pgv] [--boot N] [--seed S] [--setting ENGINE.KEY=VALUE ...]
+                        [--dt S] [--set KEY=VALUE ...] [--json] [--store DIR]
+                        [--workers N | --scheduler ADDR] [-q]
 """
 
 from __future__ import annotations
@@ -44,9 +45,9 @@ def add_fragility_command(sub) -> None:
     p.add_argument("--records", nargs="+", required=True, metavar="DIR|FILE|NAME",
                    help="record folders, record files, or a bundled ensemble name "
                         "(bundled, or a folder shipped under rockbench/records)")
-    p.add_argument("--engine", dest="engines", action="append", metavar="NAME",
-                   help="an engine (repeat, or comma-separated; default: every available "
-                        "backend); the analytic model always runs")
+    from .cli import add_engine_option, add_quiet_option, add_setting_option
+
+    add_engine_option(p, "every available backend; the analytic model always runs")
     p.add_argument("--scales", default="0.25:2:8", metavar="LO:HI:N",
                    help="ladder of scale factors of every record, N evenly spaced from LO to "
                         "HI inclusive (default 0.25:2:8)")
@@ -55,9 +56,7 @@ def add_fragility_command(sub) -> None:
     p.add_argument("--boot", type=_count, default=1000, metavar="N",
                    help="bootstrap resamples of the records (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
-    p.add_argument("--setting", dest="settings", metavar="[ENGINE.]NAME=VALUE",
-                   type=_key_value, action="append", default=[],
-                   help="a backend setting (ENGINE.NAME=VALUE for one backend)")
+    add_setting_option(p)
     p.add_argument("--dt", type=float, default=None, metavar="S",
                    help="engine time step [s] (engines only)")
     p.add_argument("--store", metavar="DIR",
@@ -67,12 +66,7 @@ def add_fragility_command(sub) -> None:
     g.add_argument("--workers", type=_count, metavar="N", help="local worker processes")
     g.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
     p.add_argument("--json", action="store_true", help="print JSON")
-
-
-def _engines(values: list[str] | None) -> list[str] | None:
-    if not values:
-        return None
-    return [n.strip() for v in values for n in v.split(",") if n.strip()]
+    add_quiet_option(p)
 
 
 def summary(frag) -> dict[str, Any]:
@@ -97,18 +91,20 @@ def _interval(ci) -> str:
 
 
 def cmd_fragility(args: argparse.Namespace) -> int:
-    from .cli_input import compare_settings, load_scene_from, scene_overrides
+    from .cli_input import engine_names, engine_settings, load_scene_from, scene_overrides
     from .fragility import run_fragility
+    from .runner import REFERENCE, resolve_engines
 
     load_scene_from(args)                      # a bad scene or --set fails now
-    engines = _engines(args.engines)
-    settings = compare_settings(engines, args) or {}
+    engines = engine_names(args)
+    selected = [e for e in (engines or resolve_engines(None)) if e != REFERENCE]
+    settings = engine_settings(list(args.settings), selected, dt=args.dt, also=(REFERENCE,))
     store = args.store or str(Path("fragility") / Path(args.scene).stem)
     frag = run_fragility(args.scene, args.records, engines=engines, scales=args.scales,
                          measure=args.intensity, settings=settings,
                          overrides=scene_overrides(args.overrides) or None, store=store,
                          workers=args.workers, scheduler=args.scheduler,
-                         progress=sys.stderr.isatty() and not args.json, n_boot=args.boot,
+                         progress=not (args.quiet or args.json), n_boot=args.boot,
                          seed=args.seed)
     out = summary(frag)
     if args.json:

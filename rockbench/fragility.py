@@ -73,6 +73,10 @@ ALPHA = 0.05
 N_BOOT = 1000
 #: Bounds of the fit: dispersion beta in [BETA_MIN, BETA_MAX]; a fit at a bound is flagged.
 BETA_MIN, BETA_MAX = 1e-3, 5.0
+#: Fewest records for which the bootstrap interval of the median difference enters a verdict
+#: (n records give at most C(2n - 1, n) distinct resamples: 6435 for 8, 3 for 2).
+MIN_RECORDS = 8
+_LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
 # =========================================================================================
@@ -236,56 +240,84 @@ def fit_lognormal(im: Sequence[float], overturned: Sequence[bool]) -> dict[str, 
 
     Returns ``median``, ``dispersion``, ``n`` runs, ``n_overturned`` and ``note``: "" for a
     regular fit; when no run (or every run) overturns the median is NaN and ``note`` says it
-    lies above the largest (below the smallest) intensity; a fit whose dispersion ends at
-    :data:`BETA_MIN` (overturning separated by intensity: a step) is kept and flagged."""
-    from scipy.optimize import minimize
-    from scipy.stats import norm
-
+    lies above the largest (below the smallest) intensity; when every survivor is below every
+    overturned run in intensity (separation: the likelihood grows without bound as beta -> 0)
+    the median is the geometric mean of the two intensities at the step, the dispersion
+    :data:`BETA_MIN`, and ``note`` says so. Optimizer: BFGS on (ln median, ln dispersion) with
+    the analytic gradient, from two starts."""
     im = np.asarray(im, dtype=float)
     ot = np.asarray(overturned, dtype=bool)
     if im.shape != ot.shape or im.size == 0:
         raise ParameterError("im", f"{im.size} values", f"as many as overturned ({ot.size}), >= 1")
     if not np.all(np.isfinite(im) & (im > 0)):
         raise ParameterError("im", "a value <= 0 or not finite", "finite intensities > 0")
-    out = {"median": math.nan, "dispersion": math.nan, "n": int(im.size),
-           "n_overturned": int(ot.sum()), "note": ""}
-    if not ot.any():
-        out["note"] = f"no run overturned: median above the largest intensity {im.max():.4g}"
+    return _fit_counts(*_grouped(im, ot))
+
+
+def _fit_counts(x: np.ndarray, n: np.ndarray, z: np.ndarray) -> dict[str, Any]:
+    """:func:`fit_lognormal` on counts: ``n[j]`` runs at intensity ``x[j]`` (> 0), ``z[j]`` of
+    them overturned (entries with n = 0 are ignored)."""
+    from scipy.optimize import minimize
+    from scipy.special import log_ndtr
+
+    keep = n > 0
+    x, n, z = x[keep], n[keep], z[keep]
+    out = {"median": math.nan, "dispersion": math.nan, "n": int(n.sum()),
+           "n_overturned": int(z.sum()), "note": ""}
+    if n.size == 0:
+        out["note"] = "no run"
         return out
-    if ot.all():
-        out["note"] = f"every run overturned: median below the smallest intensity {im.min():.4g}"
+    if z.sum() == 0:
+        out["note"] = f"no run overturned: median above the largest intensity {x.max():.4g}"
         return out
-    x, n, z = _grouped(im, ot)
+    if z.sum() == n.sum():
+        out["note"] = f"every run overturned: median below the smallest intensity {x.min():.4g}"
+        return out
     lx = np.log(x)
+    survive, fall = lx[z < n], lx[z > 0]
+    if survive.max() < fall.min():     # separated: the likelihood grows as beta -> 0
+        out["median"] = math.exp(0.5 * (survive.max() + fall.min()))
+        out["dispersion"] = BETA_MIN
+        out["note"] = ("overturning separated by intensity (a step between "
+                       f"{math.exp(survive.max()):.4g} and {math.exp(fall.min()):.4g}): "
+                       "median at their geometric mean, dispersion at its bound")
+        return out
+    tau_lo, tau_hi = math.log(BETA_MIN), math.log(BETA_MAX)
 
-    def nll(p: np.ndarray) -> float:
-        u = (lx - p[0]) / p[1]
-        return -float(np.sum(z * norm.logcdf(u) + (n - z) * norm.logsf(u)))
+    def nll(p: np.ndarray) -> tuple[float, np.ndarray]:
+        # p = (ln theta, ln beta); BFGS (pure NumPy on 2-vectors: no threaded BLAS call,
+        # which L-BFGS-B makes and which costs 100 times more on a loaded machine)
+        beta = math.exp(min(max(p[1], tau_lo - 2.0), tau_hi + 1.0))
+        u = (lx - p[0]) / beta
+        lc, ls, lp = log_ndtr(u), log_ndtr(-u), -0.5 * u * u - _LOG_SQRT_2PI
+        g = z * np.exp(lp - lc) - (n - z) * np.exp(lp - ls)       # d loglik / du
+        return (-float(np.sum(z * lc + (n - z) * ls)),
+                np.array([float(np.sum(g)) / beta, float(np.sum(g * u))]))
 
-    lo, hi = lx.min() - 3.0, lx.max() + 3.0
+    # start where the empirical overturning fraction crosses 1/2
+    t0 = lx[np.argmin(np.abs(z / n - 0.5))]
     best = None
-    for b0 in (0.2, 0.6):
-        # start at the intensity where the empirical fraction crosses 1/2
-        frac = np.cumsum(z) / np.maximum(np.cumsum(n), 1)
-        t0 = float(np.interp(0.5, np.sort(frac), lx[np.argsort(frac)])) if x.size > 1 else lx[0]
-        r = minimize(nll, np.array([min(max(t0, lo), hi), b0]), method="L-BFGS-B",
-                     bounds=[(lo, hi), (BETA_MIN, BETA_MAX)])
+    for b0 in (0.3, 1.0):
+        r = minimize(nll, np.array([t0, math.log(b0)]), jac=True, method="BFGS",
+                     options={"gtol": 1e-7})
         if best is None or r.fun < best.fun:
             best = r
-    out["median"], out["dispersion"] = float(np.exp(best.x[0])), float(best.x[1])
-    if best.x[1] <= BETA_MIN * 1.01:
+    mu = min(max(float(best.x[0]), lx.min() - 3.0), lx.max() + 3.0)
+    beta = math.exp(min(max(float(best.x[1]), tau_lo), tau_hi))
+    out["median"], out["dispersion"] = math.exp(mu), beta
+    if beta <= BETA_MIN * 1.01:
         out["note"] = "overturning separated by intensity (a step): dispersion at its bound"
     return out
 
 
 def fragility_curve(x: Sequence[float], median: float, dispersion: float) -> np.ndarray:
     """P(overturn | IM = x) = Phi(ln(x / median) / dispersion) [-]; NaN where the fit is."""
-    from scipy.stats import norm
+    from scipy.special import ndtr
 
     x = np.asarray(x, dtype=float)
     if not (math.isfinite(median) and math.isfinite(dispersion)):
         return np.full(x.shape, math.nan)
-    return norm.cdf(np.log(x / median) / dispersion)
+    return ndtr(np.log(x / median) / dispersion)
 
 
 def bootstrap(runs: pd.DataFrame, *, n_boot: int = N_BOOT, seed: int = 0,
@@ -306,17 +338,26 @@ def bootstrap(runs: pd.DataFrame, *, n_boot: int = N_BOOT, seed: int = 0,
     backends = list(dict.fromkeys(ok["backend"]))
     grid = np.asarray(grid if grid is not None else np.geomspace(
         ok["im"].min(), ok["im"].max(), 60), dtype=float)
-    by = {(b, r): g for (b, r), g in ok.groupby(["backend", "record"])}
+    # counts per record and intensity: a resample's counts are its records' counts, weighted
+    # by how often each was drawn
+    x, j = np.unique(np.round(ok["im"].to_numpy(float), 12), return_inverse=True)
+    r = np.searchsorted(records, ok["record"].to_numpy())
+    counts = {}
+    for b in backends:
+        m = ok["backend"].to_numpy() == b
+        N = np.zeros((len(records), x.size))
+        Z = np.zeros((len(records), x.size))
+        np.add.at(N, (r[m], j[m]), 1.0)
+        np.add.at(Z, (r[m], j[m]), ok["overturned"].to_numpy(bool)[m].astype(float))
+        counts[b] = (N, Z)
     rng = np.random.default_rng(seed)
     draws = rng.integers(0, len(records), size=(n_boot, len(records)))
     fits = {b: np.full((n_boot, 2), math.nan) for b in backends}
     for k, d in enumerate(draws):
+        w = np.bincount(d, minlength=len(records)).astype(float)
         for b in backends:
-            parts = [by[(b, records[i])] for i in d if (b, records[i]) in by]
-            if not parts:
-                continue
-            g = pd.concat(parts)
-            f = fit_lognormal(g["im"].to_numpy(), g["overturned"].astype(bool).to_numpy())
+            N, Z = counts[b]
+            f = _fit_counts(x, w @ N, w @ Z)
             fits[b][k] = (f["median"], f["dispersion"])
     q = [50 * (1 - level), 50 * (1 + level)]
     out: dict[str, dict[str, Any]] = {}
@@ -405,23 +446,27 @@ def _fmt(x: float) -> str:
 
 
 def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], unit: str,
-             name: str, reference: str) -> tuple[bool | None, str]:
+             name: str, reference: str, n_records: int) -> tuple[bool | None, str]:
     """(indistinguishable, sentence) of one engine (rules: :func:`analyse`)."""
     tested = [t for t in tests if math.isfinite(t["p_value"])]
     if not tested:
         return None, f"{engine}: no intensity where both ran: not judged."
     where = [t for t in tested if t["rejected"]]
     lo, hi = ci
-    median_differs = math.isfinite(lo) and math.isfinite(hi) and (lo > 0 or hi < 0)
+    judged = n_records >= MIN_RECORDS and math.isfinite(lo) and math.isfinite(hi)
+    median_differs = judged and (lo > 0 or hi < 0)
     pmin = min(t["p_value"] for t in tested)
     med = (f"fragility median {'higher' if diff > 0 else 'lower'} by {_fmt(abs(diff))} {unit} "
            f"(95 % interval {_fmt(lo)} to {_fmt(hi)} {unit})" if math.isfinite(diff)
            else "fragility medians not both estimated")
+    if not judged:
+        med += (f", not judged: {n_records} records (fewer than {MIN_RECORDS})"
+                if n_records < MIN_RECORDS else ", not judged")
     if not where and not median_differs:
         return True, (f"{engine}: statistically indistinguishable from the {reference} model at "
                       f"the 5 % level (peak distributions at {len(tested)} intensities, "
-                      f"smallest p = {_fmt(pmin)}, Holm-adjusted; {med}, the interval holds "
-                      f"0).")
+                      f"smallest p = {_fmt(pmin)}, Holm-adjusted; {med}"
+                      + (", the interval holds 0)." if judged else ")."))
     bits = []
     if where:
         bits.append("peak distributions differ at " + ", ".join(
@@ -448,7 +493,8 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
 
     An engine is *statistically indistinguishable* from the reference when no step's peak
     distributions differ (Holm, family-wise 5 %) and the 95 % interval of the difference of
-    the fragility medians holds 0. Runs not ``ok`` (diverged, error) are left out of both.
+    the fragility medians holds 0 (judged with at least :data:`MIN_RECORDS` records). Runs not
+    ``ok`` (diverged, error) are left out of both.
     """
     if measure not in MEASURES:
         raise ParameterError("intensity", measure, f"one of {', '.join(MEASURES)}")
@@ -493,7 +539,8 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
             worst = min(fin, key=lambda t: (t["p_value"], -t["statistic"])) if fin else None
             diff = res["median"] - fits.get(reference, {}).get("median", math.nan)
             ci = bt.get("median_difference_ci", [math.nan, math.nan])
-            same, text = _verdict(b, tests, diff, ci, unit, name, reference)
+            same, text = _verdict(b, tests, diff, ci, unit, name, reference,
+                                  int(mine["record"].nunique()))
             res.update(tests=tests, statistic=worst["statistic"] if worst else math.nan,
                        p_value=worst["p_value"] if worst else math.nan,
                        median_difference=diff, median_difference_ci=ci,
@@ -548,7 +595,8 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
                   overrides: Mapping[str, Any] | None = None,
                   store: str | os.PathLike | None = None, executor: str | None = None,
                   workers: int | None = None, scheduler: str | None = None,
-                  progress: bool = True, n_boot: int = N_BOOT, seed: int = 0) -> Fragility:
+                  progress: bool = True, n_boot: int = N_BOOT, seed: int = 0,
+                  keyed_by_code: bool = True) -> Fragility:
     """Run and analyse the fragility of ``scene`` (a built-in name or a .toml path) over
     ``records`` (:func:`resolve_records`) at the ladder ``scales`` (:func:`parse_scales`), both
     polarities, for the analytic model and ``engines`` (default: every available backend).
@@ -556,8 +604,9 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     ``engine_scales`` / ``engine_records``: a smaller ladder / only the first N records for the
     engines (the analytic model always runs the whole ladder on every record; the tests and
     fits compare the runs both have). ``store``: a folder; rows are kept under
-    ``store/<code fingerprint>/`` (:func:`rockbench.sweep.store.code_fingerprint`) and a rerun
-    runs only the missing cases. ``executor``: "process" (default; ``workers`` processes),
+    ``store/<code fingerprint>/`` (:func:`rockbench.sweep.store.code_fingerprint`: results of
+    other code are never mixed in; ``keyed_by_code=False`` keeps them in ``store`` itself, keyed
+    by the case only) and a rerun runs only the missing cases. ``executor``: "process" (default; ``workers`` processes),
     "serial", or "dask" (implied by ``scheduler``, a running scheduler's address).
     """
     from .runner import REFERENCE, resolve_engines
@@ -581,25 +630,22 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     executor = executor or ("dask" if scheduler else "process")
     directory = None
     if store is not None:
-        directory = S.store_dir(store) / S.code_fingerprint()
+        directory = S.store_dir(store)
+        directory = directory / S.code_fingerprint() if keyed_by_code else directory
     rows = run_cases(cases, store=directory, executor=executor, workers=workers,
                      dask_address=scheduler, progress=progress)
     runs = _runs_frame(rows, ims, measure)
     # the analysis compares the cells both ran: the analytic runs of the engines' cells
-    if len(names) > 1:
-        keys = set(zip(runs.loc[runs["backend"] != REFERENCE, "record"],
-                       runs.loc[runs["backend"] != REFERENCE, "scale"]))
-        sub = runs[(runs["backend"] != REFERENCE)
-                   | [(r, s) in keys for r, s in zip(runs["record"], runs["scale"])]]
+    eng = runs["backend"].to_numpy() != REFERENCE
+    keys = set(zip(runs["record"][eng], runs["scale"][eng]))
+    both = eng | np.array([(r, s) in keys for r, s in zip(runs["record"], runs["scale"])])
+    if len(names) == 1 or both.all():
+        analysis = analyse(runs, measure=measure, n_boot=n_boot, seed=seed)
     else:
-        sub = runs
-    analysis = analyse(runs if sub is runs or len(sub) == len(runs) else sub, measure=measure,
-                       n_boot=n_boot, seed=seed)
-    if len(sub) != len(runs):   # the analytic model on its whole ladder, for its own curve
-        full = analyse(runs[runs["backend"] == REFERENCE], measure=measure, n_boot=n_boot,
-                       seed=seed)
-        analysis["reference_full"] = full["backends"][REFERENCE]
-        analysis["reference_full"]["grid"] = full["grid"]
+        analysis = analyse(runs[both], measure=measure, n_boot=n_boot, seed=seed)
+        # the analytic model on its whole ladder and every record, for its own curve
+        full = analyse(runs[~eng], measure=measure, n_boot=n_boot, seed=seed)
+        analysis["reference_full"] = dict(full["backends"][REFERENCE], grid=full["grid"])
     return Fragility(scene=str(scene), runs=runs, analysis=analysis, stripes=stripes(runs),
                      records=ims, scales=ladder.tolist(),
                      store=str(directory) if directory is not None else None,

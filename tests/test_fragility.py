@@ -1,0 +1,289 @@
+"""Fragility (issue 26, docs/fragility.md): the lognormal MLE, the record bootstrap, the censored
+KS test, the verdicts, the resumable driver and the ``rockbench fragility`` command."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.stats import norm
+
+from rockbench.errors import ParameterError
+from rockbench.fragility import (MEASURES, _holm, analyse, bootstrap, fit_lognormal,
+                                 fragility_curve, intensity, parse_scales, peak_test,
+                                 resolve_records, run_fragility)
+from rockbench.scene.motion import Record
+
+
+# ---------------------------------------------------------------------------------------------
+# synthetic ensembles
+# ---------------------------------------------------------------------------------------------
+def _ensemble(capacities, scales, backend="analytic", im_of_record=1.0):
+    """Runs of records whose capacity (the intensity at which they overturn) is known: a run
+    overturns iff its intensity >= the record's capacity; survivors peak at 0.8 im/capacity."""
+    rows = []
+    for r, c in enumerate(capacities):
+        for pol in (1, -1):
+            for s in scales:
+                im = s * im_of_record
+                ot = im >= c
+                rows.append({"backend": backend, "record": f"R{r:03d}", "polarity": pol,
+                             "scale": float(s), "im": im, "peak": 1.2 if ot else 0.8 * im / c,
+                             "overturned": bool(ot), "status": "ok", "cpu_s": 0.0})
+    return pd.DataFrame(rows)
+
+
+def _quantile_capacities(n, median, beta):
+    """n capacities at the (k + 1/2)/n quantiles of a lognormal (deterministic)."""
+    return median * np.exp(beta * norm.ppf((np.arange(n) + 0.5) / n))
+
+
+# ---------------------------------------------------------------------------------------------
+# the MLE
+# ---------------------------------------------------------------------------------------------
+def test_mle_recovers_a_known_lognormal():
+    """Binomial counts drawn exactly at P = Phi(ln(x/theta)/beta) (400 runs at each of 12
+    intensities): the fit returns theta and beta."""
+    theta, beta = 3.0, 0.45
+    x = np.geomspace(0.8, 9.0, 12)
+    im, ot = [], []
+    for xi in x:
+        z = int(round(400 * float(norm.cdf(np.log(xi / theta) / beta))))
+        im += [xi] * 400
+        ot += [True] * z + [False] * (400 - z)
+    f = fit_lognormal(im, ot)
+    assert f["median"] == pytest.approx(theta, rel=0.01)
+    assert f["dispersion"] == pytest.approx(beta, rel=0.02)
+    assert f["n"] == 4800 and f["note"] == ""
+    np.testing.assert_allclose(fragility_curve([theta], f["median"], f["dispersion"]), [0.5],
+                               atol=1e-3)
+
+
+def test_mle_degenerate_and_bad_inputs():
+    none = fit_lognormal([1.0, 2.0, 3.0], [False, False, False])
+    assert math.isnan(none["median"]) and "above the largest intensity 3" in none["note"]
+    every = fit_lognormal([1.0, 2.0], [True, True])
+    assert math.isnan(every["median"]) and "below the smallest intensity 1" in every["note"]
+    step = fit_lognormal([1.0, 2.0, 3.0, 4.0], [False, False, True, True])
+    assert 2.0 <= step["median"] <= 3.0 and "step" in step["note"]
+    with pytest.raises(ParameterError, match="im"):
+        fit_lognormal([0.0, 1.0], [False, True])
+    with pytest.raises(ParameterError, match="im"):
+        fit_lognormal([1.0], [False, True])
+
+
+# ---------------------------------------------------------------------------------------------
+# the bootstrap
+# ---------------------------------------------------------------------------------------------
+def test_bootstrap_is_seeded_and_brackets_the_truth():
+    theta, beta = 2.0, 0.4
+    runs = _ensemble(_quantile_capacities(40, theta, beta), np.linspace(0.5, 5.0, 10))
+    a = bootstrap(runs, n_boot=150, seed=3)["analytic"]
+    b = bootstrap(runs, n_boot=150, seed=3)["analytic"]
+    c = bootstrap(runs, n_boot=150, seed=4)["analytic"]
+    assert a["median_ci"] == b["median_ci"] and a["median_ci"] != c["median_ci"]
+    lo, hi = a["median_ci"]
+    assert lo < theta < hi and hi - lo < 0.6 * theta
+    assert a["dispersion_ci"][0] < beta < a["dispersion_ci"][1]
+    assert a["n_valid"] == 150
+    # the curve's band holds the true curve where it is informative (P between 10 and 90 %)
+    grid = np.asarray(a["grid"])
+    true = norm.cdf(np.log(grid / theta) / beta)
+    mid = (true > 0.1) & (true < 0.9)
+    assert np.all(np.asarray(a["band"]["low"])[mid] <= true[mid] + 1e-9)
+    assert np.all(np.asarray(a["band"]["high"])[mid] >= true[mid] - 1e-9)
+
+
+@pytest.mark.slow
+def test_bootstrap_interval_covers_the_truth_at_about_the_nominal_rate():
+    """100 ensembles of 30 records with lognormal capacities (seeded): the 95 % percentile
+    interval of the median holds the true median in 85-99 % of them (the nominal 95 %, with the
+    binomial spread of 100 trials and the percentile bootstrap's small-sample bias)."""
+    theta, beta = 2.0, 0.4
+    rng = np.random.default_rng(12345)
+    hits = 0
+    for k in range(100):
+        caps = theta * np.exp(beta * rng.standard_normal(30))
+        runs = _ensemble(caps, np.linspace(0.5, 5.0, 10))
+        lo, hi = bootstrap(runs, n_boot=200, seed=k)["analytic"]["median_ci"]
+        hits += lo <= theta <= hi
+    assert 85 <= hits <= 99
+
+
+# ---------------------------------------------------------------------------------------------
+# the test of the peaks
+# ---------------------------------------------------------------------------------------------
+def test_ks_on_identical_samples_gives_p_one():
+    p = np.linspace(0.05, 0.9, 17)
+    ot = np.zeros(17, bool)
+    ot[-3:] = True
+    t = peak_test(p, ot, p, ot)
+    assert t["statistic"] == 0.0 and t["p_value"] == 1.0 and t["n_a"] == t["n_b"] == 17
+
+
+def test_ks_censors_overturned_runs_above_every_survivor():
+    """An overturned run is above every survivor, whatever angle it stopped at: two samples
+    that differ only in where their overturned runs stopped are identical (without the rule
+    the distance would be 1/3)."""
+    t = peak_test([0.1, 0.2, 0.05], [False, False, True], [0.1, 0.2, 3.0], [False, False, True])
+    assert t["statistic"] == 0.0 and t["p_value"] == 1.0
+    far = peak_test(np.linspace(0.1, 0.2, 20), np.zeros(20, bool),
+                    np.linspace(0.5, 0.6, 20), np.zeros(20, bool))
+    assert far["statistic"] == 1.0 and far["p_value"] < 1e-6
+
+
+def test_holm():
+    assert _holm([0.01, 0.04, 0.03, 0.5]).tolist() == [True, False, False, False]
+    assert _holm([0.001, 0.012, 0.02, math.nan]).tolist() == [True, True, True, False]
+
+
+# ---------------------------------------------------------------------------------------------
+# verdicts
+# ---------------------------------------------------------------------------------------------
+def test_an_identical_engine_is_indistinguishable_and_a_weaker_one_is_not():
+    caps = _quantile_capacities(20, 2.0, 0.4)
+    scales = np.linspace(0.5, 5.0, 10)
+    ref = _ensemble(caps, scales)
+    same = _ensemble(caps, scales, backend="twin")
+    weak = _ensemble(caps / 2.0, scales, backend="weak")   # overturns at half the intensity
+    a = analyse(pd.concat([ref, same, weak]), n_boot=100)
+    tw, wk = a["backends"]["twin"], a["backends"]["weak"]
+    assert tw["indistinguishable"] is True and tw["p_value"] == 1.0
+    assert tw["median_difference"] == 0.0 and tw["median_difference_ci"] == [0.0, 0.0]
+    assert "statistically indistinguishable" in tw["verdict"]
+    assert wk["indistinguishable"] is False and wk["p_value"] < 1e-3
+    assert wk["median_difference"] == pytest.approx(-1.0, rel=0.1)
+    assert wk["median_difference_ci"][1] < 0
+    assert "distinguishable" in wk["verdict"] and "scale" in wk["verdict"]
+    assert a["intensity"]["name"] == "PGA" and a["intensity"]["unit"] == "m/s^2"
+
+
+# ---------------------------------------------------------------------------------------------
+# inputs
+# ---------------------------------------------------------------------------------------------
+def test_intensity_measures_of_a_sine():
+    """a = A sin(w t) over whole periods: PGA = A, PGV = max |A (1 - cos w t) / w| = 2 A / w."""
+    A, w, dt = 2.5, 2 * math.pi, 1e-4
+    t = np.arange(0.0, 3.0 + dt / 2, dt)
+    rec = Record(t, A * np.sin(w * t))
+    assert intensity(rec, "pga") == pytest.approx(A, rel=1e-6)
+    assert intensity(rec, "pgv") == pytest.approx(2 * A / w, rel=1e-6)
+    assert MEASURES["pgv"][:2] == ("PGV", "m/s")
+    with pytest.raises(ParameterError, match="intensity"):
+        intensity(rec, "sa")
+
+
+def test_scales():
+    assert parse_scales("0.5:2:4").tolist() == [0.5, 1.0, 1.5, 2.0]
+    assert parse_scales("1:1:1").tolist() == [1.0]
+    assert parse_scales([2, 1, 1]).tolist() == [1.0, 2.0]
+    for bad in ("0:1:3", "2:1:3", "1:2", "a:b:c", "1:2:0", [0.0], [-1.0]):
+        with pytest.raises(ParameterError, match="scales"):
+            parse_scales(bad)
+
+
+def _write_tiny_records(folder):
+    """Two short headerless records (cm/s^2, dt 0.01 s) and their records.csv."""
+    folder.mkdir(parents=True, exist_ok=True)
+    t = np.arange(0.0, 2.0, 0.01)
+    for name, f in (("TINY1", 2.0), ("TINY2", 3.0)):
+        a = 150.0 * np.sin(2 * math.pi * f * t) * np.exp(-t)
+        np.savetxt(folder / f"{name}.dat", a.reshape(-1, 4), fmt="%.6e")
+    (folder / "records.csv").write_text("record,npts,dt_s,units\nTINY1,200,0.01,cm/s^2\n"
+                                        "TINY2,200,0.01,cm/s^2\n")
+    return folder
+
+
+def test_resolve_records(tmp_path):
+    d = _write_tiny_records(tmp_path / "recs")
+    assert [r["name"] for r in resolve_records(d)] == ["TINY1", "TINY2"]
+    one = resolve_records([d / "TINY2.dat", d])            # a file, then its folder: once each
+    assert [r["name"] for r in one] == ["TINY2", "TINY1"] and one[0]["dt"] == 0.01
+    bundled = resolve_records("bundled")
+    assert {r["name"] for r in bundled} >= {"IV1940_ElCentro_180"}
+    with pytest.raises(ParameterError, match="records"):
+        resolve_records(tmp_path / "nowhere")
+    (tmp_path / "lone.dat").write_text("1 2 3\n")
+    with pytest.raises(ParameterError, match="records.csv"):
+        resolve_records(tmp_path / "lone.dat")
+
+
+# ---------------------------------------------------------------------------------------------
+# the driver: resumable
+# ---------------------------------------------------------------------------------------------
+def test_resume_after_an_interruption(tmp_path, monkeypatch):
+    """Ctrl-C after 3 runs: the rerun runs only the 5 missing cases, and gives what an
+    uninterrupted run gives."""
+    import rockbench.sweep.runs as R
+
+    d = _write_tiny_records(tmp_path / "recs")
+    real = R.run_case
+    calls = []
+
+    def interrupted(case):
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        calls.append(case)
+        return real(case)
+
+    kw = dict(engines=["analytic"], scales="1:2:2", store=tmp_path / "store",
+              executor="serial", progress=False, n_boot=20)
+    monkeypatch.setattr(R, "run_case", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run_fragility("paper-asymmetric", d, **kw)
+    calls.clear()
+    monkeypatch.setattr(R, "run_case", lambda c: calls.append(c) or real(c))
+    f = run_fragility("paper-asymmetric", d, **kw)
+    assert len(calls) == 8 - 3 and len(f.runs) == 8
+    calls.clear()
+    again = run_fragility("paper-asymmetric", d, **kw)
+    assert calls == []
+    cols = ["backend", "record", "polarity", "scale", "im", "peak", "overturned", "status"]
+    pd.testing.assert_frame_equal(f.runs[cols], again.runs[cols])
+    # a record's intensity is scale x its PGA, both polarities alike
+    g = f.runs[f.runs["record"] == "TINY1"]
+    assert np.allclose(g["im"] / g["scale"], g["im"].iloc[0] / g["scale"].iloc[0])
+
+
+# ---------------------------------------------------------------------------------------------
+# the command
+# ---------------------------------------------------------------------------------------------
+def test_cli_end_to_end_json(tmp_path, capsys):
+    from rockbench.cli import main
+
+    pytest.importorskip("pymunk")
+    d = _write_tiny_records(tmp_path / "recs")
+    store = tmp_path / "store"
+    argv = ["fragility", "paper-asymmetric", "--records", str(d), "--engine", "pymunk",
+            "--scales", "0.5:1:2", "--store", str(store), "--workers", "1", "--boot", "50",
+            "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["intensity"]["name"] == "PGA" and out["intensity"]["unit"] == "m/s^2"
+    assert out["records"] == 2 and out["scales"] == [0.5, 1.0]
+    assert set(out["backends"]) == {"analytic", "pymunk"}
+    for b in out["backends"].values():
+        assert {"median", "dispersion", "median_ci", "dispersion_ci", "runs"} <= set(b)
+        assert b["runs"] == 2 * 2 * 2
+    pm = out["backends"]["pymunk"]
+    assert {"statistic", "p_value", "median_difference", "median_difference_ci",
+            "verdict", "tests"} <= set(pm)
+    assert 0.0 <= pm["p_value"] <= 1.0 and len(pm["tests"]) == 2
+    # the rerun runs nothing and prints the verdict in words
+    assert main(argv[:-1] + ["--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "PGA [m/s^2]" in text and "pymunk:" in text
+
+
+def test_cli_bad_input_is_one_line(capsys):
+    from rockbench.cli import main
+
+    assert main(["fragility", "paper-asymmetric", "--records", "bundled",
+                 "--scales", "2:1:3"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rockbench: error:") and "scales" in err and len(err.splitlines()) == 1
+    assert main(["fragility", "paper-asymmetric", "--records", "no-such-ensemble"]) == 2
+    assert "bundled" in capsys.readouterr().err
