@@ -136,7 +136,7 @@ def _inputs(scene, scene_ref: str, engine: str, settings: dict, method: str,
     """What a store was written for. ``keyed_by_code``: include rockbench's code fingerprint
     (a store written by other code is refused); without it the store is keyed by the inputs
     and the engine's version only, and its reuse must be verified by re-running sample cells
-    (:func:`verify_map`)."""
+    (:func:`reuse_map`)."""
     from .engines import engine_info
     from .sweep.store import code_fingerprint
 
@@ -806,7 +806,9 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
 
     sc = load_scene(scene)
     want = _inputs(sc, str(scene), engine, {}, "", tail, keyed_by_code=False)
-    old = json.loads(meta.read_text())
+    old = _read_inputs(path)
+    if isinstance(old, str):
+        return None, f"the measured map {path.name} has an unreadable {meta.name} ({old})"
     diff = [k for k in want if old.get(k) != want[k]]
     if diff:
         return None, (f"the measured map {path.name} was written for other inputs "

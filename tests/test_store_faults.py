@@ -384,3 +384,13 @@ def test_adaptive_map_of_a_frame_with_tendons():
     df = run_map("paper-asymmetric-hybrid-eps1", adaptive=True, grid=(9, 9), progress=False,
                  pulses="symmetric+", tail=0.5)
     assert len(df) == 81 and df.attrs["cells_run"] + df.attrs["inferred"] == 81
+
+
+def test_a_measured_map_with_a_broken_inputs_file_is_not_reused(good, tmp_path):
+    from rockbench.maps import reuse_map
+
+    _, store = good
+    copy = _copy(store, tmp_path / "m.parquet")
+    (copy / "_inputs.json").write_text("{")
+    df, why = reuse_map(copy, "paper-asymmetric", "pymunk", **CELLS)
+    assert df is None and "unreadable _inputs.json" in why
