@@ -4,18 +4,25 @@ point for overturning maps (:func:`run_pulse_grid`).
 
 Design (measured choices, see ``benchmarks/results/compiled_analytic.md``):
 
-* Kinematics and Eq. 17 terms are *evaluated*, not tabulated: the exact closed-form four-bar
-  solution of :mod:`rockbench.scene.mechanism` and the terms of :mod:`rockbench.analytic.dynamics`
-  (with tendon elongation = base + top opening and damper chord rates) are ported line by line to
-  compiled code that reads plain parameter arrays extracted once per scene (:func:`scene_arrays`).
-  One evaluation of phi'' costs a few trigonometric calls, so there is no interpolation error to
-  budget for and the right-hand side agrees with ``Dynamics.acceleration`` to round-off.
+* Kinematics and Eq. 17 terms are *evaluated*, not tabulated, in closed form from plain
+  parameter arrays extracted once per scene (:func:`scene_arrays`), specialised by mechanism
+  (:func:`rockbench.analytic.kernels._kinematics`): a block; a frame whose linkage is a
+  parallelogram (the symmetric frame) as the Housner block it exactly is (constant I, J = 0,
+  G and B combinations of cos phi and sin phi: one sin and one cos per evaluation); any other
+  frame by the exact loop closure of :mod:`rockbench.scene.mechanism` with the link directions
+  taken from the linkage's vectors (no atan2). phi'' agrees with ``Dynamics.acceleration`` to
+  1e-12 of the equation's largest term (``tests/analytic/test_compiled.py``), so there is no
+  interpolation error to budget for.
 * The integrator is the same explicit Runge-Kutta method of order 8 with a 7th-order error
   estimate and 7th-order dense output (Dormand-Prince 8(5,3), "DOP853") that the reference path
-  uses through ``scipy.integrate.solve_ivp``, with the same step-size controller, the same initial
-  step selection and the same tolerances (``AnalyticSettings.rtol``/``atol``, 1e-10 / 1e-12 by
-  default). The Butcher tableau is read at import time from scipy's own coefficient table, so
-  both paths integrate the same scheme and the fast path tracks the plain one step for step.
+  uses through ``scipy.integrate.solve_ivp``, with the same step-size controller and the same
+  tolerances (``AnalyticSettings.rtol``/``atol``, 1e-10 / 1e-12 by default); the Butcher tableau
+  is read at import time from scipy's own coefficient table. Unlike ``solve_ivp``, which starts
+  every segment with its initial-step selection, the step size is kept across impacts and
+  fractures (the first step after an impact at most |phi' / phi''|, short of the excursion's
+  peak, so that it cannot step over the return to phi = 0); only an uplift from rest selects an
+  initial step. The two paths therefore do not track each other step for step: they agree to
+  the integration tolerance on every well-conditioned quantity (docs/reproducibility.md).
 * Events are located as ``solve_ivp`` does: a sign change of the event function between two
   accepted steps (with the event's direction), then Brent's method on the dense output to
   4 machine epsilons; events after the first terminal one in a step are dropped.
@@ -87,8 +94,9 @@ def _require_numba() -> None:
 def scene_arrays(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Plain parameter arrays of ``scene`` for the compiled kernel, computed once per scene.
 
-    Returns ``geo`` (2 x 32: one row per direction, index 0 for +1 and 1 for -1: mechanism
-    geometry, masses, inertias, b, k, C) and ``sc`` (scalars: lambda, eta, fall, fracture and
+    Returns ``geo`` (2 x 40: one row per direction, index 0 for +1 and 1 for -1: the kind of
+    mechanism (0 block, 1 frame, 2 parallelogram frame), its geometry, masses, inertias, b, k, C,
+    cos and sin of the links' rest angles, a parallelogram's block constants) and ``sc`` (scalars: lambda, eta, fall, fracture and
     critical angles, alpha, p, devices flag), all from :func:`reference_of`.
     """
     ref = reference_of(scene)
@@ -105,7 +113,11 @@ def scene_arrays(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
         row[28] = dyn._c
         mech = dyn.mechanism
         if isinstance(st, Frame):
-            row[0] = 1.0
+            # a parallelogram (equal, parallel columns: B0 - A = C0 - D) is evaluated in its
+            # exact closed form (kernels._kinematics, kind 2), any other linkage by its closure
+            para = (abs(mech._rho0 - mech._rho1) <= 1e-12 * mech._rho0
+                    and abs(mech._phiAB0 - mech._phiCD0) <= 1e-12)
+            row[0] = 2.0 if para else 1.0
             row[1:3] = mech._A
             row[3:5] = mech._D
             row[5], row[6], row[7] = mech._rho0, mech._rho1, mech._L
@@ -114,6 +126,19 @@ def scene_arrays(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
             row[13:15] = mech._rb
             row[15:17] = mech._rr
             row[17] = mech._branch
+            row[32] = mech._rho0 * math.cos(mech._phiAB0)      # B0 - A
+            row[33] = mech._rho0 * math.sin(mech._phiAB0)
+            for j, a in enumerate((mech._phiAB0, mech._phiBC0, mech._phiCD0)):
+                row[34 + 2 * j] = math.cos(a)
+                row[35 + 2 * j] = math.sin(a)
+            if para:
+                # the block form (kernels._phidd): P = sum m r_x, Q = sum m r_y of the rest
+                # offsets (columns about their pivots, the beam's pivot B about A), constant I
+                offs = ((row[11], row[12]), (row[32], row[33]), (row[15], row[16]))
+                row[40] = sum(mi * o[0] for mi, o in zip(m, offs))
+                row[41] = sum(mi * o[1] for mi, o in zip(m, offs))
+                row[42] = (sum(mi * (o[0] ** 2 + o[1] ** 2) for mi, o in zip(m, offs))
+                           + Ic[0] + Ic[2])
         else:
             row[0] = 0.0
             px, py = mech.pivot

@@ -12,6 +12,31 @@ from .kernels import (_NOUT, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_M
 
 
 @njit(cache=True)
+def _initial_step(t, ya0, ya1, f0, f1, interval, rtol, atol, mk, mp, rt, ra, hint, g, intact,
+                  kin):
+    """scipy's common.select_initial_step for DOP853 (order 7): one more phi'' evaluation."""
+    s0 = atol + abs(ya0) * rtol
+    s1 = atol + abs(ya1) * rtol
+    d0 = _rms2(ya0, ya1, s0, s1)
+    d1 = _rms2(f0, f1, s0, s1)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    y1a = ya0 + h0 * f0
+    y1b = ya1 + h0 * f1
+    fb0 = y1b
+    fb1 = _phidd(y1a, y1b, _acc(t + h0, mk, mp, rt, ra, hint), g, intact, kin)
+    d2 = _rms2(fb0 - f0, fb1 - f1, s0, s1) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+    return min(100.0 * h0, h1, interval)
+
+
+@njit(cache=True)
 def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rtol, atol,
          v_rest, thr_p, thr_n, motion_end, v_chat, dt_chat, min_adv, window, max_iter,
          A, B, C, E3, E5, Dd, ns, want_ev, evf, evi, want_hist, tg, hist, hmode, out):
@@ -55,7 +80,8 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
     phid = phid0
     n_iter = 0
     recent = np.zeros(max(1, window))
-    has_last = False       # last impact of the current rocking episode (chatter rule)
+    h_keep = -1.0          # step size proposed at the end of the last segment (kept across
+    has_last = False       # impacts); last impact of the current rocking episode (chatter rule)
     last_t = 0.0
     last_v = 0.0
     adv = 0.0
@@ -96,6 +122,7 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
             phid = 0.0
             mode = s
             has_last = False
+            h_keep = -1.0
             continue
 
         s = mode
@@ -119,28 +146,18 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
         f0 = ya1
         f1 = _phidd(ya0, ya1, ag, g, intact, kin)
         nfev += 1
-        # initial step (common.select_initial_step, order 7)
         interval = abs(t_end - t)
-        s0 = atol + abs(ya0) * rtol
-        s1 = atol + abs(ya1) * rtol
-        d0 = _rms2(ya0, ya1, s0, s1)
-        d1 = _rms2(f0, f1, s0, s1)
-        if d0 < 1e-5 or d1 < 1e-5:
-            h0 = 1e-6
+        if h_keep > 0.0:
+            # after an impact or a fracture: the step size the controller proposed last, the
+            # first step at most |phi' / phi''| (short of the excursion's peak when phi'' points
+            # back, so that it cannot step over the return to phi = 0)
+            h_abs = min(h_keep, interval)
+            if s * f1 < 0.0 and ya1 != 0.0:
+                h_abs = min(h_abs, abs(ya1 / f1))
         else:
-            h0 = 0.01 * d0 / d1
-        h0 = min(h0, interval)
-        y1a = ya0 + h0 * f0
-        y1b = ya1 + h0 * f1
-        fb0 = y1b
-        fb1 = _phidd(y1a, y1b, _acc(t + h0, mk, mp, rt, ra, hint), g, intact, kin)
-        nfev += 1
-        d2 = _rms2(fb0 - f0, fb1 - f1, s0, s1) / h0
-        if d1 <= 1e-15 and d2 <= 1e-15:
-            h1 = max(1e-6, h0 * 1e-3)
-        else:
-            h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
-        h_abs = min(100.0 * h0, h1, interval)
+            h_abs = _initial_step(t, ya0, ya1, f0, f1, interval, rtol, atol, mk, mp, rt, ra,
+                                  hint, g, intact, kin)
+            nfev += 1
         # events at the start: impact, overturn, fracture, critical, peak
         # impact (s phi falls to 0) and peak (s phi' falls to 0) are taken as positive at the
         # segment's first instant, so that a root is never the start itself (solver.py)
@@ -382,10 +399,12 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
                     nev = _push_event(evf, evi, nev, t, 6, 0.0, phid * eta, 0.0, np.nan, 0)
                 after = 0.0
                 has_last = False
+                h_keep = -1.0
             else:
                 has_last = True
                 last_t = t
                 last_v = abs(after)
+                h_keep = h_abs
             phid = after
             mode = new_mode
         elif term_kind == 1:   # overturn
@@ -394,6 +413,7 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
             if want_ev:
                 nev = _push_event(evf, evi, nev, t, 5, phi, phid, phid, np.nan, s)
         else:                  # fracture
+            h_keep = h_abs
             intact = False
             fractured = True
             t_frac = t

@@ -50,7 +50,7 @@ _REASONS = {1: "integrator step size fell below 10 ulp (solver could not advance
             3: "event buffer full",
             4: "event loop exceeded the maximum number of iterations"}
 # layout of the per-direction geometry rows (see scene_arrays)
-_NGEO = 32
+_NGEO = 44
 # layout of the summary vector returned by the kernel
 (_O_STATUS, _O_T, _O_MAXABS, _O_OVER, _O_TOVER, _O_EXC, _O_UPL, _O_TUPL, _O_NIMP, _O_FRAC,
  _O_TFRAC, _O_STEPS, _O_NFEV, _O_NEV, _O_PHI, _O_PHID, _O_MODE, _O_INTACT, _O_ADV) = range(19)
@@ -73,8 +73,14 @@ _XFAC = 2.0 * math.pi / math.sqrt(3.0)
 def _body(ox, oy, dox, doy, ddox, ddoy, rx, ry, th, dth, ddth, out, j):
     """dx, dy, ddx, ddy of the centre of mass of a body rotating by th(phi) about a point O
     (mechanism._body_about), written to out[j, :]."""
-    c = math.cos(th)
-    s = math.sin(th)
+    _body_cs(ox, oy, dox, doy, ddox, ddoy, rx, ry, math.cos(th), math.sin(th), th, dth, ddth,
+             out, j)
+
+
+@njit(cache=True, inline="always")
+def _body_cs(ox, oy, dox, doy, ddox, ddoy, rx, ry, c, s, th, dth, ddth, out, j):
+    """:func:`_body` with c = cos(th), s = sin(th) given (computed once for several bodies, or
+    from the linkage's vectors without a trigonometric call)."""
     qx = c * rx - s * ry
     qy = s * rx + c * ry
     out[j, 0] = dox - dth * qy
@@ -87,14 +93,33 @@ def _body(ox, oy, dox, doy, ddox, ddoy, rx, ry, th, dth, ddth, out, j):
 
 
 @njit(cache=True)
-def _kinematics(phi, g, kin):
+def _kinematics(phi, g, kin, need_theta):
     """Fill kin[body] = (dx, dy, ddx, ddy, theta, dtheta, ddtheta) of every body at ``phi``
     (mechanism.FrameMechanism.configuration / BlockMechanism.configuration). Returns the number of
-    bodies, or -1 beyond the reach of the four-bar linkage."""
+    bodies, or -1 beyond the reach of the four-bar linkage.
+
+    Three forms, chosen per scene by ``g[0]`` (compiled.scene_arrays): 0 a block; 2 a frame whose
+    linkage is a parallelogram (equal columns: the beam translates and both columns turn by phi,
+    one sin and one cos of phi for every body); 1 any other frame, the exact loop closure with
+    the link directions taken from the linkage's vectors (one sin and cos, four square roots; no
+    atan2 and no further trigonometric call). The beam's and right column's rotations (theta,
+    used only by the devices) are computed with atan2 only when ``need_theta`` (0 otherwise).
+    All three agree with the general closed form
+    of :mod:`rockbench.scene.mechanism` to round-off (tests/analytic/test_dynamics.py)."""
     if g[0] == 0.0:
         _body(g[1], g[2], 0.0, 0.0, 0.0, 0.0, g[3], g[4], phi, 1.0, 0.0, kin, 0)
         return 1
     Ax, Ay, Dx, Dy = g[1], g[2], g[3], g[4]
+    if g[0] == 2.0:
+        c = math.cos(phi)
+        s = math.sin(phi)
+        bx = c * g[32] - s * g[33]          # B - A = Rot(phi) (B0 - A)
+        by = s * g[32] + c * g[33]
+        _body_cs(Ax, Ay, 0.0, 0.0, 0.0, 0.0, g[11], g[12], c, s, phi, 1.0, 0.0, kin, 0)
+        _body_cs(Ax + bx, Ay + by, -by, bx, -bx, -by, g[13], g[14], 1.0, 0.0, 0.0, 0.0, 0.0,
+                 kin, 1)
+        _body_cs(Dx, Dy, 0.0, 0.0, 0.0, 0.0, g[15], g[16], c, s, phi, 1.0, 0.0, kin, 2)
+        return 3
     r0, r1, L = g[5], g[6], g[7]
     pab = g[8] + phi
     cab = math.cos(pab)
@@ -112,12 +137,15 @@ def _kinematics(phi, g, kin):
     hh = g[17] * math.sqrt(h2)
     Cx = Dx + (ap * ux - hh * uy) / d
     Cy = Dy + (ap * uy + hh * ux) / d
-    pbc = math.atan2(Cy - By, Cx - Bx)
-    pcd = math.atan2(Cy - Dy, Cx - Dx)
-    sbc = math.sin(pbc)
-    cbc = math.cos(pbc)
-    scd = math.sin(pcd)
-    ccd = math.cos(pcd)
+    # link directions: (cos, sin) of atan2 of the link vectors, by normalising the vectors
+    vbx = Cx - Bx
+    vby = Cy - By
+    cbc = vbx / L
+    sbc = vby / L
+    vdx = Cx - Dx
+    vdy = Cy - Dy
+    ccd = vdx / r1
+    scd = vdy / r1
     m11 = -L * sbc
     m12 = r1 * scd
     m21 = L * cbc
@@ -133,9 +161,22 @@ def _kinematics(phi, g, kin):
     ddcd = (m11 * g2 - g1 * m21) / det
     bx = Bx - Ax
     by = By - Ay
-    _body(Ax, Ay, 0.0, 0.0, 0.0, 0.0, g[11], g[12], phi, 1.0, 0.0, kin, 0)
-    _body(Bx, By, -by, bx, -bx, -by, g[13], g[14], pbc - g[10], dbc, ddbc, kin, 1)
-    _body(Dx, Dy, 0.0, 0.0, 0.0, 0.0, g[15], g[16], pcd - g[9], dcd, ddcd, kin, 2)
+    # body rotations: phi (left), phi_BC - phi_BC0 (beam), phi_CD - phi_CD0 (right), by the
+    # angle-difference formulas with cos/sin of the rest angles (g[34:40])
+    cl = cab * g[34] + sab * g[35]
+    sl = sab * g[34] - cab * g[35]
+    cb = cbc * g[36] + sbc * g[37]
+    sb = sbc * g[36] - cbc * g[37]
+    cr = ccd * g[38] + scd * g[39]
+    sr = scd * g[38] - ccd * g[39]
+    thb = 0.0
+    thr = 0.0
+    if need_theta:
+        thb = math.atan2(vby, vbx) - g[10]
+        thr = math.atan2(vdy, vdx) - g[9]
+    _body_cs(Ax, Ay, 0.0, 0.0, 0.0, 0.0, g[11], g[12], cl, sl, phi, 1.0, 0.0, kin, 0)
+    _body_cs(Bx, By, -by, bx, -bx, -by, g[13], g[14], cb, sb, thb, dbc, ddbc, kin, 1)
+    _body_cs(Dx, Dy, 0.0, 0.0, 0.0, 0.0, g[15], g[16], cr, sr, thr, dcd, ddcd, kin, 2)
     return 3
 
 
@@ -158,10 +199,35 @@ def _devices(kin, b):
     return el, er, dl, dr, cl, cr
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _phidd(phi, pd, ag, g, intact, kin):
-    """phi'' [rad/s^2] of Eq. 17 (Dynamics.acceleration)."""
-    nb = _kinematics(phi, g, kin)
+    """phi'' [rad/s^2] of Eq. 17 (Dynamics.acceleration).
+
+    A parallelogram frame (``g[0] == 2``) is a Housner block exactly: I is constant (g[42]),
+    J = 0, G(phi) = P cos(phi) - Q sin(phi) and B(phi) = Q cos(phi) + P sin(phi) with P = sum
+    m_i r_ix, Q = sum m_i r_iy over the bodies' rest offsets (g[40], g[41]: scene_arrays): one
+    sin and one cos of phi per evaluation; the devices see both columns turned by phi and the
+    beam not at all."""
+    dev = intact and (g[27] > 0.0 or g[28] > 0.0)
+    if g[0] == 2.0:
+        c = math.cos(phi)
+        s = math.sin(phi)
+        P = g[40]
+        Q = g[41]
+        K = 0.0
+        D = 0.0
+        if dev:
+            kin[0, 4] = phi
+            kin[0, 5] = 1.0
+            kin[1, 4] = 0.0
+            kin[1, 5] = 0.0
+            kin[2, 4] = phi
+            kin[2, 5] = 1.0
+            el, er, dl, dr, cl, cr = _devices(kin, g[26])
+            K = g[27] * (el * dl + er * dr)
+            D = g[28] * (cl * cl + cr * cr)
+        return ((Q * c + P * s) * ag - (P * c - Q * s) * 9.81 - K - D * pd) / g[42]
+    nb = _kinematics(phi, g, kin, dev)
     if nb < 0:
         return np.nan
     In = 0.0
@@ -181,14 +247,14 @@ def _phidd(phi, pd, ag, g, intact, kin):
     D = 0.0
     k = g[27]
     c = g[28]
-    if intact and (k > 0.0 or c > 0.0):
+    if dev:
         el, er, dl, dr, cl, cr = _devices(kin, g[26])
         K = k * (el * dl + er * dr)
         D = c * (cl * cl + cr * cr)
     return (Bm * ag - J * pd * pd - Gm * 9.81 - K - D * pd) / In
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _acc(t, mk, mp, rt, ra, hint):
     """Ground acceleration [m/s^2] (RickerPulse.acceleration / Record.acceleration)."""
     if mk == 1:
