@@ -248,7 +248,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the tables as JSON")
     add_quiet_option(p)
 
-    p = sub.add_parser("report", help="run the default campaign and write the HTML report")
+    p = sub.add_parser("report", help="run a campaign (the paper's, or one about your scenes) "
+                                      "and write the HTML report")
+    p.add_argument("scenes", nargs="*", metavar="SCENE",
+                   help="the structures to report on (built-in names or .toml files; the first "
+                        "is the one the decision is about); none: the paper's frames")
+    p.add_argument("--plan", metavar="FILE",
+                   help="a campaign plan file (kind = \"campaign-plan\", docs/report.md)")
     p.add_argument("--out", default="reports", metavar="DIR", help="output folder (reports)")
     p.add_argument("--records", metavar="DIR", help="records folder (default: bundled ones)")
     add_engine_option(p, "every available one")
@@ -634,7 +640,14 @@ def cmd_report(args: argparse.Namespace) -> int:
     engines = engine_names(args)
     kwargs: dict[str, Any] = {"full": args.full, "progress": not args.quiet,
                               "engines": engines, "records_dir": args.records,
-                              "quick": args.quick, "store": args.store}
+                              "quick": args.quick, "store": args.store,
+                              "scenes": list(args.scenes) or None}
+    if args.plan is not None:
+        if args.scenes:
+            raise ParameterError("--plan", args.plan, "either --plan FILE or scenes, not both")
+        if not Path(args.plan).is_file():
+            raise ParameterError("--plan", args.plan, "an existing plan file (.toml)")
+        kwargs["plan"] = args.plan
     if args.dask is not None:
         kwargs.update(executor="dask", dask_address=args.dask)
     if args.workers is not None:

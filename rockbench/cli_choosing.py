@@ -71,6 +71,9 @@ def add_choosing_commands(sub) -> None:
     add_quiet_option(p)
 
     p = sub.add_parser("stress", help="every engine at the extremes, one axis at a time")
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
+                   help="the base structure (built-in name or .toml file; default: the "
+                        "paper's asymmetric frame, its device axes from the hybrid one)")
     add_engine_option(p, "every available one")
     p.add_argument("--full", action="store_true", help="the whole ranges (slow)")
     p.add_argument("--axes", type=_names, metavar="A,B,...", help="only these axes")
@@ -177,8 +180,12 @@ def cmd_stress(args: argparse.Namespace) -> int:
     engines = engine_names(args)
     if args.out:
         _output_folder(Path(args.out) / "stress.csv", "--out")
+    scene = getattr(args, "scene", None)
+    if scene is not None:
+        from .scene.scene import load_scene
+        load_scene(scene)                    # a bad scene fails before anything runs
     s = stress(engines, full=args.full, axes=args.axes, progress=not args.quiet,
-               **_executor(args))
+               scene=scene, **_executor(args))
     if args.out:
         _write_atomic({Path(args.out) / "stress.csv": s.table}, "--out")
         for eng in dict.fromkeys(s.table["engine"]):
@@ -189,8 +196,9 @@ def cmd_stress(args: argparse.Namespace) -> int:
     cols = ["engine", "axis", "value", "class", "error", "status", "flags", "reason"]
     with _pandas_display():
         print(s.table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-        print("\nfirst break away from the paper's frame, per engine and axis:")
-        b = breaking_points(s.table)
+        print("\nfirst break away from the " + ("paper's frame" if scene is None else
+              f"base scene {scene}") + ", per engine and axis:")
+        b = breaking_points(s.table, scene)
         print(b.to_string(index=False) if len(b) else "none: every point within 5 % or "
               "outside the analytic model")
     return 0
