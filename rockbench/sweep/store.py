@@ -64,25 +64,44 @@ def key(item: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+#: What decides a run's physics, relative to the package: the analytic model, the engine
+#: adapters, the scene model and its data files, and the measurements and metrics computed from
+#: a run. Nothing else (command line, report, campaign, studies, testing; the plans and case
+#: lists, which are inputs that the stores key on) enters the fingerprint, so editing a help
+#: text or a figure keeps every stored result.
+PHYSICS_CODE = ("analytic", "engines", "scene", "scenarios", "measure.py", "constants.py",
+                "result.py", "compare.py", "runner.py", "sensitivity.py")
+
+
+def fingerprint_files() -> list[str]:
+    """The files :func:`code_fingerprint` hashes (paths relative to the package), sorted."""
+    import rockbench
+
+    root = Path(rockbench.__file__).resolve().parent
+    out = []
+    for f in sorted(root.rglob("*")):
+        rel = f.relative_to(root).as_posix()
+        if (f.is_file() and f.suffix in (".py", ".toml") and "__pycache__" not in rel
+                and rel.split("/")[0] in PHYSICS_CODE
+                and not (rel.startswith("scenarios/")          # plans and case lists are
+                         and (f.name == "cases.toml" or f.name.endswith("-plan.toml")))):
+            out.append(rel)
+    return out
+
+
 @functools.lru_cache(maxsize=1)
 def code_fingerprint() -> str:
-    """A short hash of what decides a run's physics: rockbench's source files (modules and
-    scenarios, except the report, command-line, testing and campaign layers) and the versions
-    of the installed engines."""
+    """A short hash of what decides a run's physics (:data:`PHYSICS_CODE`: the files of
+    :func:`fingerprint_files`) and of the versions of the installed engines."""
     import rockbench
 
     from ..engines import engine_versions
 
     root = Path(rockbench.__file__).resolve().parent
     h = hashlib.sha256()
-    for f in sorted(root.rglob("*")):
-        rel = f.relative_to(root).as_posix()
-        if (not f.is_file() or f.suffix not in (".py", ".toml")
-                or rel.split("/")[0] in ("report", "testing")
-                or rel in ("cli.py", "__main__.py", "campaign.py")):
-            continue
+    for rel in fingerprint_files():
         h.update(rel.encode())
-        h.update(f.read_bytes())
+        h.update((root / rel).read_bytes())
     h.update(json.dumps(engine_versions(), sort_keys=True).encode())  # imports no engine
     return h.hexdigest()[:12]
 
