@@ -91,7 +91,8 @@ LIMITS: dict[str, Limit] = {lim.key: lim for lim in (
     Limit("max_samples", None, 2e6,
           why="history rows of one run, duration / output_dt (2e6 rows ~ 0.5 GB of history)"),
     Limit("max_steps", None, 2e7,
-          why="engine steps of one run, duration / dt (2e7 steps ~ 10 minutes of stepping)"),
+          why="engine steps of one run, duration / dt (2e7 steps: 1.4 CPU min for pymunk, "
+              "24-32 for OpenSees, PyBullet, Drake; benchmarks/results/longest_run.md)"),
     Limit("A", 0.0, 100.0, lo_open=True,
           why="pulse amplitude A = a_g / (g tan alpha); uplift needs A > 1, the paper's maps "
               "end near 20"),
