@@ -319,6 +319,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     check_options(executor, workers, dask_address)
     names = resolve_engines(engines) if engines is not None else available_backends()
     names = [REFERENCE] + [n for n in names if n != REFERENCE]
+    fragility_records = records_dir      # None: the fragility section's own ensemble (issue 26)
     if records_dir is None and not quick:
         records_dir = _bundled_dir()       # the public-domain records shipped in the package
     if records_dir is not None:
@@ -432,6 +433,19 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         records = _records(records_dir, plan, names, notes, store=sweep_store, **run)
     timings["records"] = time.perf_counter() - t
 
+    # 6: fragility over an ensemble of records (issue 26; rockbench/campaign_fragility.py) ----
+    t = time.perf_counter()
+    frag: dict[str, Any] = {}
+    if not quick:
+        from .campaign_fragility import fragility_section
+
+        frag = fragility_section(plan["record_frames"], names, records=fragility_records,
+                                 size="full" if full else "default",
+                                 store=store_dir / "fragility",
+                                 executor=executor, workers=workers, scheduler=dask_address,
+                                 progress=progress)
+    timings["fragility"] = time.perf_counter() - t
+
     # tables -----------------------------------------------------------------------------
     t = time.perf_counter()
     metrics = T.metrics_table(payloads)
@@ -443,6 +457,9 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
              "tradeoff.csv": choice["tradeoff"], "advice.csv": choice["advice"]}
     if len(records):
         files["record_peaks.csv"] = records
+    if frag.get("frames"):
+        from .campaign_fragility import section_table
+        files["fragility.csv"] = section_table(frag)
     if choice.get("stress") is not None:
         files["stress.csv"] = choice["stress"]
         files["stress_breaking_points.csv"] = choice["breaks"]
@@ -479,6 +496,11 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                       f"W in {mp['analytic_frequency']}, pulse window + 10 s",
         axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
              f"+ {mp['engine_tail']:g} s")))
+    if frag:                                   # issue 26: report/fragility_figures.py
+        from .report.fragility_figures import fragility_html
+        at += 1
+        sections.insert(at, ("fragility-section", "Fragility over records (paper Fig. 9)",
+                             fragility_html(frag, out / "figures")))
     # the decision first (report/decision.py): the advice, one row per engine, work-precision
     from .report.choice_page import work_precision_html
     from .report.decision import decision_html

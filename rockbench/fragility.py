@@ -23,7 +23,7 @@ Pure functions (plain arrays and frames in, numbers out):
 
 One driver: :func:`run_fragility` builds the cases, runs them through the one executor and the
 one store (:func:`rockbench.sweep.run_cases`: resumable, in parallel, on Dask with a scheduler
-address) and analyses them. :func:`fragility_section` is the default campaign's part.
+address) and analyses them. The default campaign's part is :mod:`rockbench.campaign_fragility`.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from .errors import ParameterError
 __all__ = ["MEASURES", "RUN_COLUMNS", "ALPHA", "N_BOOT", "intensity", "parse_scales",
            "resolve_records", "fragility_cases", "fit_lognormal", "fragility_curve",
            "bootstrap", "peak_test", "stripes", "analyse", "run_fragility", "Fragility",
-           "fragility_section", "REPORT_SIZES"]
+           "bundled_ensembles"]
 
 #: Intensity measures: key -> (name, unit, definition).
 MEASURES: dict[str, tuple[str, str, str]] = {
@@ -73,8 +73,8 @@ ALPHA = 0.05
 N_BOOT = 1000
 #: Bounds of the fit: dispersion beta in [BETA_MIN, BETA_MAX]; a fit at a bound is flagged.
 BETA_MIN, BETA_MAX = 1e-3, 5.0
-#: Fewest records for which the bootstrap interval of the median difference enters a verdict
-#: (n records give at most C(2n - 1, n) distinct resamples: 6435 for 8, 3 for 2).
+#: Fewest records for a verdict (n records give at most C(2n - 1, n) distinct bootstrap
+#: resamples: 6435 for 8, 3 for 2; and the KS test on 2 n runs has little power below that).
 MIN_RECORDS = 8
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
@@ -136,9 +136,7 @@ def bundled_ensembles() -> list[str]:
     """Names usable as ``--records NAME``: ``bundled`` and every subfolder of the package's
     ``rockbench/records``."""
     from .scene.records import _bundled_dir
-
-    root = _bundled_dir()
-    return ["bundled"] + sorted(p.name for p in root.iterdir() if p.is_dir()
+    return ["bundled"] + sorted(p.name for p in _bundled_dir().iterdir() if p.is_dir()
                                 and not p.name.startswith(("_", ".")))
 
 
@@ -147,7 +145,8 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike]
     """Records of ``sources``: folders (searched like
     :func:`rockbench.scene.records.find_records`: ``.AT2`` files and headerless files listed in a
     ``records.csv``), single files (``.AT2``, or headerless beside a ``records.csv`` listing
-    them), or bundled ensemble names (:func:`bundled_ensembles`). Each record a dict name, path,
+    them), bundled ensemble names (:func:`bundled_ensembles`), or records this function
+    returned. Each record a dict name, path,
     dt [s] or None, units or None; ParameterError when a source is none of these or no record
     is found; a name given twice is kept once."""
     from .scene.records import find_records, listed_metadata
@@ -158,6 +157,9 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike]
     out: dict[str, dict[str, Any]] = {}
     top = None
     for src in items:
+        if isinstance(src, Mapping):          # already resolved (a dict of this function)
+            out.setdefault(src["name"], dict(src))
+            continue
         p = Path(src)
         if p.is_dir():
             recs = find_records(p)[0]
@@ -227,9 +229,8 @@ def fragility_cases(scene: str, records: Sequence[Mapping[str, Any]], engines: S
 # =========================================================================================
 def _grouped(im: np.ndarray, overturned: np.ndarray) -> tuple[np.ndarray, ...]:
     x, inv = np.unique(np.round(im, 12), return_inverse=True)
-    n = np.bincount(inv, minlength=x.size).astype(float)
-    z = np.bincount(inv, weights=overturned.astype(float), minlength=x.size)
-    return x, n, z
+    return (x, np.bincount(inv, minlength=x.size).astype(float),
+            np.bincount(inv, weights=overturned.astype(float), minlength=x.size))
 
 
 def fit_lognormal(im: Sequence[float], overturned: Sequence[bool]) -> dict[str, Any]:
@@ -350,8 +351,7 @@ def bootstrap(runs: pd.DataFrame, *, n_boot: int = N_BOOT, seed: int = 0,
         np.add.at(N, (r[m], j[m]), 1.0)
         np.add.at(Z, (r[m], j[m]), ok["overturned"].to_numpy(bool)[m].astype(float))
         counts[b] = (N, Z)
-    rng = np.random.default_rng(seed)
-    draws = rng.integers(0, len(records), size=(n_boot, len(records)))
+    draws = np.random.default_rng(seed).integers(0, len(records), size=(n_boot, len(records)))
     fits = {b: np.full((n_boot, 2), math.nan) for b in backends}
     for k, d in enumerate(draws):
         w = np.bincount(d, minlength=len(records)).astype(float)
@@ -400,11 +400,9 @@ def peak_test(peaks_a: Sequence[float], overturned_a: Sequence[bool],
         return p
 
     a, b = censor(peaks_a, overturned_a), censor(peaks_b, overturned_b)
-    if a.size == 0 or b.size == 0:
-        return {"statistic": math.nan, "p_value": math.nan, "n_a": int(a.size), "n_b": int(b.size)}
-    r = ks_2samp(a, b)
-    return {"statistic": float(r.statistic), "p_value": float(r.pvalue), "n_a": int(a.size),
-            "n_b": int(b.size)}
+    r = ks_2samp(a, b) if a.size and b.size else None
+    return {"statistic": float(r.statistic) if r else math.nan,
+            "p_value": float(r.pvalue) if r else math.nan, "n_a": int(a.size), "n_b": int(b.size)}
 
 
 def stripes(runs: pd.DataFrame) -> pd.DataFrame:
@@ -438,9 +436,7 @@ def _holm(p: Sequence[float], alpha: float = ALPHA) -> np.ndarray:
     return reject
 
 
-# =========================================================================================
-# The analysis of a frame of runs
-# =========================================================================================
+# ------------------------------------------------------------------------- the analysis
 def _fmt(x: float) -> str:
     return "nan" if not math.isfinite(x) else f"{x:.3g}"
 
@@ -451,17 +447,19 @@ def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], u
     tested = [t for t in tests if math.isfinite(t["p_value"])]
     if not tested:
         return None, f"{engine}: no intensity where both ran: not judged."
+    pmin = min(t["p_value"] for t in tested)
+    if n_records < MIN_RECORDS:
+        return None, (f"{engine}: not judged: {n_records} record(s), fewer than {MIN_RECORDS} "
+                      f"(peak distributions at {len(tested)} intensities, smallest p = "
+                      f"{_fmt(pmin)}; fragility median difference {_fmt(diff)} {unit}).")
     where = [t for t in tested if t["rejected"]]
     lo, hi = ci
-    judged = n_records >= MIN_RECORDS and math.isfinite(lo) and math.isfinite(hi)
+    judged = math.isfinite(lo) and math.isfinite(hi)
     median_differs = judged and (lo > 0 or hi < 0)
-    pmin = min(t["p_value"] for t in tested)
     med = (f"fragility median {'higher' if diff > 0 else 'lower'} by {_fmt(abs(diff))} {unit} "
            f"(95 % interval {_fmt(lo)} to {_fmt(hi)} {unit})" if math.isfinite(diff)
            else "fragility medians not both estimated")
-    if not judged:
-        med += (f", not judged: {n_records} records (fewer than {MIN_RECORDS})"
-                if n_records < MIN_RECORDS else ", not judged")
+    med += "" if judged else ", not judged"
     if not where and not median_differs:
         return True, (f"{engine}: statistically indistinguishable from the {reference} model at "
                       f"the 5 % level (peak distributions at {len(tested)} intensities, "
@@ -493,8 +491,8 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
 
     An engine is *statistically indistinguishable* from the reference when no step's peak
     distributions differ (Holm, family-wise 5 %) and the 95 % interval of the difference of
-    the fragility medians holds 0 (judged with at least :data:`MIN_RECORDS` records). Runs not
-    ``ok`` (diverged, error) are left out of both.
+    the fragility medians holds 0; with fewer than :data:`MIN_RECORDS` records the engine is not
+    judged (``indistinguishable`` None). Runs not ``ok`` (diverged, error) are left out of both.
     """
     if measure not in MEASURES:
         raise ParameterError("intensity", measure, f"one of {', '.join(MEASURES)}")
@@ -549,9 +547,7 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
     return out
 
 
-# =========================================================================================
-# The driver
-# =========================================================================================
+# --------------------------------------------------------------------------- the driver
 @dataclass
 class Fragility:
     """What :func:`run_fragility` returns: ``runs`` (:data:`RUN_COLUMNS`), ``analysis``
@@ -582,8 +578,7 @@ def _runs_frame(rows: pd.DataFrame, ims: pd.DataFrame, measure: str) -> pd.DataF
         "peak": rows["max_abs_phi_over_alpha"].astype(float).to_numpy(),
         "overturned": rows["overturned"].fillna(False).astype(bool).to_numpy(),
         "status": rows["status"].astype(str).to_numpy(),
-        "cpu_s": rows["cpu_s"].astype(float).to_numpy() if "cpu_s" in rows
-        else np.full(len(rows), math.nan)})
+        "cpu_s": rows.get("cpu_s", pd.Series(math.nan, index=rows.index)).astype(float)})
     return out
 
 
@@ -651,3 +646,4 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
                      store=str(directory) if directory is not None else None,
                      info={"engines": names, "engine_scales": e_ladder.tolist(),
                            "engine_records": len(e_recs), "executor": executor})
+
