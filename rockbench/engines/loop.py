@@ -35,6 +35,7 @@ import pandas as pd
 from ..analytic.closure import closure_function
 from ..analytic.reference import reference_of
 from ..constants import G
+from ..errors import ParameterError, RockbenchError
 from ..measure import excursions, measure_impacts
 from ..progress import sim_time
 from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
@@ -142,7 +143,8 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     native_report: list[tuple] = []
     out = Stepped(grid=grid, states=states[:0], intact=sample_intact[:0])
     checker = SampleChecks(cfg, specs, probe, crit, uplift_phi,
-                            free=motion is None and devices is None)
+                            free=motion is None and devices is None,
+                            energy_floor=_energy_floor(reference_of(scene)))
     n = 0                              # samples written
     no_forces: tuple = ()
     backend.steps = 0
@@ -151,7 +153,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     read = backend._state
     clock = time.perf_counter
     try:
-        backend._build()
+        _build(backend)
         state = np.array(read(), dtype=float)
         kernel = backend._compiled_loop()
         if kernel is not None:
@@ -222,6 +224,8 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     except Diverged as e:
         n = getattr(e, "samples", n)
         out.status, out.reason = "diverged", str(e)
+    except RockbenchError:            # bad input found at the boundary: not physics
+        raise
     except Exception as e:  # engine failure at the adapter boundary
         out.status, out.reason = "diverged", f"{type(e).__name__}: {e}"
     finally:
@@ -243,6 +247,23 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
 
 class _Done(Exception):
     """A compiled loop finished the run (leaves the Python loop)."""
+
+
+def _build(backend) -> None:
+    """``backend._build()``, with the engine's refusals translated at the adapter boundary:
+    an engine that cannot build the scene with these settings (MuJoCo's "mass and inertia of
+    moving bodies must be larger than mjMINVAL", an XML number too large, a C integer
+    overflow) was given an impossible input - a :class:`ParameterError` naming the settings
+    and the engine's words (exit 2 on the command line), not a run that "diverged"."""
+    try:
+        backend._build()
+    except RockbenchError:
+        raise
+    except Exception as e:
+        detail = " ".join(f"{type(e).__name__}: {e}".split())
+        raise ParameterError("scene", backend.scene.name,
+                             f"a scene {backend.name} can build with these settings",
+                             f"{backend.name} refused it: {detail[:300]}") from None
 
 
 def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact, intact,
@@ -306,9 +327,13 @@ class SampleChecks:
     still falls, and the verdict is what matters). Each raises :class:`Diverged` naming the
     first offending sample."""
 
-    def __init__(self, cfg, specs, probe, crit, uplift_phi, *, free: bool):
+    def __init__(self, cfg, specs, probe, crit, uplift_phi, *, free: bool,
+                 energy_floor: float = 0.0):
         self.cfg, self.probe, self.crit, self.uplift_phi = cfg, probe, crit, uplift_phi
         self.free = free
+        #: [J] added to |E0| as the scale of energy growth (:func:`_energy_floor`): a structure
+        #: released where its potential is ~0 (2 alpha, beyond its critical angle) has E0 ~ 0
+        self.energy_floor = energy_floor
         self.mass = np.array([sp.mass for sp in specs])
         self.inertia = np.array([sp.inertia for sp in specs])
         self.y0 = np.array([sp.y for sp in specs])
@@ -338,13 +363,17 @@ class SampleChecks:
                         + self.inertia * S[:, :, 5] ** 2).sum(axis=1)
                  + G * (self.mass * (S[:, :, 1] - self.y0)).sum(axis=1))
             if self.energy0 is None:
-                self.energy0 = max(float(e[0]), 1e-300)
-            grew = e > self.energy0 * (1 + cfg.energy_gain_tol)
+                self.energy0 = float(e[0])
+            scale = max(abs(self.energy0) + self.energy_floor, 1e-300)
+            # not while falling past the critical angle (as the contact checks): the verdict
+            # is what matters there, and a fall's energies dwarf E0 ~ 0 of a release near 2 alpha
+            grew = (e > self.energy0 + cfg.energy_gain_tol * scale) & ~_falling(
+                S[:, 0, 2], intact[start:n], self.crit)
             if grew.any():
                 i = int(np.argmax(grew))
                 self._fail(start + i, f"mechanical energy grew by "
-                                      f"{100 * (e[i] / self.energy0 - 1):.2f} % without input "
-                                      f"(t={grid[start + i]:.4g} s)")
+                                      f"{100 * (e[i] - self.energy0) / scale:.2f} % without "
+                                      f"input (t={grid[start + i]:.4g} s)")
         ph = S[:, 0, 2]
         modes = np.where(np.abs(ph) <= self.uplift_phi, 0, np.sign(ph))
         pen, sl, op = self.probe.measure_many(S, modes)
@@ -458,6 +487,20 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                 status = "diverged"
             else:
                 status, reason = _unmeasured(imp, cfg)
+        if status == "ok":
+            reason = _frozen(scene, motion, ref, tt, ph, intact.astype(bool), phi0, t0,
+                             uplift_phi)
+            if reason is not None:
+                status = "invalid"
+    elif status == "diverged" and n and not overturned:
+        over, t_o, note = _judge_stopped(scene, motion, ref, tt, ph, pd_, intact.astype(bool),
+                                         t0)
+        if over:                      # the fall the analytic model finished from the last state
+            overturned, t_over = True, t_o
+            ev.append(dict(t=t_o, kind="overturn", phi=float(ph[-1]),
+                           phidot_before=float(pd_[-1]), phidot_after=float(pd_[-1]),
+                           direction=1 if ph[-1] > 0 else -1))
+        reason = f"{reason}; {note}" if note else reason
     events = events_frame(sorted(ev, key=lambda r: r["t"]))
     impacts = events[events["kind"] == "impact"]
     max_abs = float(np.max(np.abs(ph))) if ph.size else 0.0
@@ -482,6 +525,142 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                   motion=motion.describe() if motion is not None else {"kind": "none"},
                   history=history, events=events, summary=summary, cost=cost,
                   settings=out_settings)
+
+
+def _energy_floor(ref) -> float:
+    """[J] The potential at |phi| = alpha / 20 (the smaller of the two directions): the floor
+    of the energy scale of the divergence checks (as :func:`_peak_energy_growth` uses it)."""
+    return min(ref.dyn[s].energy(s * 0.05 * ref.alpha, 0.0, True) for s in (1, -1))
+
+
+def _judge_stopped(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray,
+                   phidot: np.ndarray, intact: np.ndarray, t0: float
+                   ) -> tuple[bool, float | None, str | None]:
+    """(overturned, t_overturn [s], note) of a run that diverged at its last sample, by the
+    verdict rule of every backend:
+
+    * past its critical angle: the fall is finished with the analytic model from the engine's
+      last state (phi, phidot at t, under what is left of the ground motion), as the maps
+      finish a fall under way for the reference (``rockbench.maps``): the verdict is the
+      model's from there, and the note says so;
+    * inside it, with the ground motion over and the mechanical energy left unable to lift
+      |phi| past the peak measured (impacts and dampers only remove energy): the peak and the
+      verdict (survived) measured before the divergence are final, and the note says so;
+    * otherwise the verdict is unknown, and the note says so (the summary's ``overturned``
+      is then False only because no fall was seen)."""
+    j = phi.size - 1
+    p, pd, t_j, on = float(phi[j]), float(phidot[j]), float(t[j]), bool(intact[j])
+    s = 1 if p > 0 else -1
+    alpha = ref.alpha
+    where = f"{p / alpha:.4g} alpha, phidot {pd:.3g} rad/s at t = {t_j:.4g} s"
+    if _falling(phi[j:], intact[j:], ref.critical)[0]:
+        from ..analytic.solver import simulate
+
+        sc = scene if (on or not scene.has_devices) else scene.replace(devices=None)
+        rest = _Remaining(motion, t_j) if motion is not None else None
+        long = (max(float(motion.t_end) - t_j, 0.0) if motion is not None else 0.0) + 20.0
+        try:
+            r = simulate(sc, rest, duration=long, phi0=p, phidot0=pd,
+                         reference=ref if sc is scene else None)
+        except Exception as e:  # noqa: BLE001 - the verdict stays unknown
+            return False, None, f"it stopped past its critical angle ({where}); finishing the " \
+                                f"fall with the analytic model failed ({type(e).__name__})"
+        off = 0.0 if motion is not None else t_j
+        if r.summary.overturned and r.summary.t_overturn is not None:
+            t_o = float(r.summary.t_overturn) + off
+            return True, t_o, (f"it diverged past its critical angle ({where}): finished with "
+                               f"the analytic model from that state, it overturns at "
+                               f"t = {t_o:.4g} s (verdict overturned)")
+        return False, None, (f"it diverged past its critical angle ({where}): finished with "
+                             "the analytic model from that state, it comes back and survives")
+    quiet = t0 if motion is None else float(motion.t_end)
+    unknown = (f"its verdict is unknown: it stopped inside its critical angle ({where})")
+    if t_j < quiet:
+        return False, None, f"{unknown} before the ground motion was over (t = {quiet:.4g} s)"
+    dyn = ref.dyn
+    peak = float(np.max(np.abs(phi)))
+    left = dyn[s].energy(p, pd, on)
+    bound = min(dyn[d].energy(d * peak, 0.0, on) for d in (1, -1))
+    if left <= bound and peak < min(ref.critical[(d, on)] for d in (1, -1)):
+        return False, None, (f"it diverged after its peak ({where}): the ground motion was "
+                             f"over and the energy left ({left:.4g} J) cannot lift |phi| past "
+                             f"the peak measured ({peak / alpha:.4g} alpha, {bound:.4g} J): "
+                             "the peak and the verdict (survived) measured before are final")
+    return False, None, (f"{unknown} with energy left ({left:.4g} J) that could lift |phi| past "
+                         f"its peak ({peak / alpha:.4g} alpha, {bound:.4g} J)")
+
+
+class _Remaining:
+    """What is left of a ground motion from ``t`` [s] on (the same acceleration; the run
+    starts at ``t``): the analytic model's input when it finishes a fall an engine left."""
+
+    def __init__(self, motion, t: float):
+        self._m, self.t_start = motion, t
+        self.t_end = max(float(motion.t_end), t)
+
+    def acceleration(self, t):
+        return self._m.acceleration(t)
+
+    def knots(self, t0: float, t1: float) -> np.ndarray:
+        return self._m.knots(t0, t1)
+
+    def max_abs_after(self, t: float) -> float:
+        return self._m.max_abs_after(t)
+
+    @property
+    def peak(self) -> float:
+        return self._m.max_abs_after(self.t_start)
+
+    def describe(self) -> dict[str, Any]:
+        return dict(self._m.describe(), t_start_s=self.t_start)
+
+
+def _frozen(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray, intact: np.ndarray,
+            phi0: float, t0: float, uplift_phi: float) -> str | None:
+    """Why a run that finished cleanly did not move when it had to (None if it moved or did not
+    have to): |phi - phi0| stayed within ``uplift_phi`` [rad] over the whole run while
+
+    * free rocking from phi0 != 0: gravity accelerates the structure at phi'' (Eq. 17 at rest)
+      and moves it by min(|phi0|, phi'' T^2 / 2) >= 10 ``uplift_phi`` within the run's T;
+    * under a ground motion whose peak exceeds the uplift threshold (min lambda g): the analytic
+      model, run only in this case, lifts it by at least 10 ``uplift_phi``.
+
+    A frozen world (bodies that do not respond to gravity or to the ground motion: a
+    negligible mass against the engine's contact regularisation, a broken step) is not a
+    result: its status is "invalid" with this reason."""
+    if not phi.size:
+        return None
+    moved = float(np.max(np.abs(phi - phi0)))
+    if moved > uplift_phi:
+        return None
+    span = float(t[-1] - t0)
+    if motion is None:
+        if phi0 == 0.0:
+            return None
+        s = 1 if phi0 > 0 else -1
+        acc = abs(ref.dyn[s].acceleration(phi0, 0.0, 0.0, bool(intact[0])))
+        expect = min(abs(phi0), 0.5 * acc * span * span)
+        what = f"gravity moves it {expect:.3g} rad within the run (phi'' = {acc:.3g} rad/s^2 " \
+               "at release)"
+    else:
+        lam = min(abs(ref.lam[1]), abs(ref.lam[-1])) * G
+        if not float(motion.peak) > 1.5 * lam or span <= 0.0:
+            return None
+        from ..analytic.solver import simulate
+
+        try:
+            r = simulate(scene, motion, duration=span, phi0=0.0, reference=ref)
+        except Exception:  # noqa: BLE001 - no reference, no verdict
+            return None
+        expect = float(r.summary.max_abs_phi)
+        what = (f"the analytic model rocks it to {expect:.3g} rad under this ground motion "
+                f"(peak {float(motion.peak):.3g} m/s^2 > 1.5 x its uplift acceleration "
+                f"{lam:.3g} m/s^2)")
+    if expect < 10.0 * uplift_phi:
+        return None
+    return (f"the structure did not move: |phi - phi0| stayed below {moved:.3g} rad (uplift_tol "
+            f"alpha = {uplift_phi:.3g} rad) over the whole run, while {what}: its bodies do not "
+            "respond (a frozen world)")
 
 
 def _unmeasured(impacts: list, cfg) -> tuple[str, str | None]:
