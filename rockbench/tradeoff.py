@@ -53,8 +53,8 @@ from .errors import ParameterError
 from .validation import (ValidationCase, _analytic, _scene_from_key,
                          _scene_key, overturn_threshold, validation_set)
 
-__all__ = ["DEFAULT_DTS", "ValidationCase", "validation_set", "overturn_threshold", "Setting",
-           "settings_grid", "tradeoff", "Tradeoff", "summarize", "classify_error",
+__all__ = ["DEFAULT_DTS", "precision_sweeps", "ValidationCase", "validation_set",
+           "overturn_threshold", "Setting", "settings_grid", "tradeoff", "Tradeoff", "summarize", "classify_error",
            "RUN_COLUMNS", "TABLE_COLUMNS", "VERDICTS", "case_error"]
 
 #: Default time steps [s] of the work-precision sweep.
@@ -101,10 +101,28 @@ class Setting:
         return ",".join(parts)
 
     def refined(self, factor: int = REFINEMENT) -> "Setting":
-        """The same setting at dt / factor."""
+        """The same setting at dt / factor (or, for a setting of a backend's own precision
+        knob, :func:`precision_sweeps`, that knob / factor)."""
         d = dict(self.overrides)
-        d["dt"] = self.dt / factor
+        knob = next((k for k, _, _ in precision_sweeps(self.engine) if k != "dt" and k in d),
+                    "dt")
+        d[knob] = (self.dt if knob == "dt" else float(d[knob])) / factor
         return Setting(self.engine, tuple(sorted(d.items())))
+
+
+def precision_sweeps(engine: str) -> tuple:
+    """The work-precision curves of ``engine``: its backend class's ``precision_sweeps``, a
+    tuple of (knob, values or None, fixed overrides) - the setting that trades accuracy for
+    cost, the values to sweep coarse to fine (None: the sweep's time steps) and the settings
+    held with it (e.g. Drake: CENIC's ``accuracy``, and ``dt`` with a fixed-step solver);
+    ``(("dt", None, {}),)`` for a backend that declares none."""
+    from .engines import get_backend
+
+    try:
+        return tuple(getattr(get_backend(engine), "precision_sweeps", None)
+                     or (("dt", None, {}),))
+    except Exception:      # an unavailable engine: the runs report it
+        return (("dt", None, {}),)
 
 
 def _parse_value(text: str) -> Any:
@@ -156,12 +174,18 @@ def settings_grid(engines: Sequence[str], dts: Iterable[float] | None = None,
             only = ex.pop("__engine__", None)
             if only is not None and only != eng:
                 continue
-            for d in ([ex["dt"]] if "dt" in ex else dts):
-                o = dict(ex)
-                o["dt"] = float(d)
-                s = Setting(eng, tuple(sorted(o.items())))
-                if s not in out:
-                    out.append(s)
+            # each of the engine's curves (precision_sweeps: dt for every engine but those
+            # whose class declares its own knob); an extra that sets the knob is run as given
+            for knob, values, fixed in (precision_sweeps(eng) if not ex else
+                                        (("dt", None, {}),)):
+                vals = [ex[knob]] if knob in ex else (dts if values is None else values)
+                for v in vals:
+                    o = {**fixed, **ex, knob: float(v)}
+                    if knob == "dt" or "dt" in ex:
+                        o["dt"] = float(o.get("dt", v))
+                    s = Setting(eng, tuple(sorted(o.items())))
+                    if s not in out:
+                        out.append(s)
     return out
 
 
@@ -426,6 +450,10 @@ TABLE_COLUMNS: dict[str, str] = {
     "cpu_per_sim_s_max": "s/s, the same for the slowest repeat",
     "real_time_factor": "-, simulated s per CPU s (1 / cpu_per_sim_s)",
     "repeats": "-, runs of every case (cost spread over them)",
+    "curve": "-, the work-precision curve of the setting: the engine, and the overrides held "
+             "along it (precision_sweeps)",
+    "knob": "-, the setting that moves along the curve (dt, or the engine's own knob)",
+    "knob_value": "the knob's value (s for dt)",
     "build_cpu_s": "s, median CPU time of building the engine's model for one run (one-off)",
     "warmup_cpu_s": "s, largest one-off warm-up CPU time of a worker process (first run: "
                     "imports, JIT compile)",
@@ -471,6 +499,18 @@ def _runs_frame(runs: list[dict[str, Any]]) -> pd.DataFrame:
     for c in ("reason",):
         df[c] = df[c].fillna("").astype(str)
     return df
+
+
+def _curve(engine: str, label: str) -> dict[str, Any]:
+    """The curve, knob and knob value of a setting label (``"dt=0.001,accuracy=1e-05"``):
+    the knob is the engine's own (:func:`precision_sweeps`) when the label sets it, else dt;
+    the curve is the engine with the label's other overrides but dt."""
+    parts = dict(p.split("=", 1) for p in label.split(",") if "=" in p)
+    knobs = [k for k, _, _ in precision_sweeps(engine) if k != "dt" and k in parts]
+    knob = knobs[0] if knobs else "dt"
+    rest = ",".join(f"{k}={v}" for k, v in parts.items() if k not in (knob, "dt"))
+    return {"curve": f"{engine} {rest}" if rest else engine, "knob": knob,
+            "knob_value": float(parts.get(knob, "nan"))}
 
 
 def summarize(runs: pd.DataFrame) -> pd.DataFrame:
@@ -542,6 +582,7 @@ def summarize(runs: pd.DataFrame) -> pd.DataFrame:
             "cpu_per_sim_s_min": float(np.min(per_rep)) if per_rep else math.nan,
             "cpu_per_sim_s_max": float(np.max(per_rep)) if per_rep else math.nan,
             "repeats": len(per_rep),
+            **_curve(eng, label),
             "build_cpu_s": stat(g["build_cpu_s"], np.median),
             "warmup_cpu_s": stat(g["warmup_cpu_s"], np.max),
         }

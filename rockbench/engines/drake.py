@@ -134,6 +134,14 @@ class DrakeBackend(EngineBackend):
     package: ClassVar[str] = "drake"
     Settings: ClassVar[type] = DrakeSettings
 
+    #: The work-precision curves (:func:`rockbench.tradeoff.precision_sweeps`): CENIC's
+    #: ``accuracy`` (its knob, not dt), coarse to fine, and a fixed-step solver's ``dt`` over
+    #: the sweep's time steps.
+    precision_sweeps: ClassVar[tuple] = (
+        ("accuracy", (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7), {}),
+        ("dt", None, {"solver": "similar"}),
+    )
+
     @classmethod
     def available(cls) -> tuple[bool, str]:
         try:

@@ -82,13 +82,16 @@ def plot_work_precision(table: pd.DataFrame, *, errors: Sequence[str] = ("worst_
         finite = y_all[np.isfinite(y_all) & (y_all > 0)]
         top = float(finite.max()) * 3 if finite.size else 1.0
         bottom = float(finite.min()) / 3 if finite.size else 1e-4
-        for name in dict.fromkeys(t["engine"]):
-            s = t[t["engine"] == name].sort_values("dt", ascending=False)
+        key = "curve" if "curve" in t.columns else "engine"     # an engine may have two
+        for name in dict.fromkeys(t[key]):
+            s = t[t[key] == name].sort_values("knob_value" if "knob_value" in t.columns
+                                              else "dt", ascending=False)
             x = s[cost].astype(float).to_numpy()
             y = np.abs(s[err].astype(float).to_numpy())
-            col = engine_color(name)
+            col = engine_color(str(s["engine"].iloc[0]))
             ok = np.isfinite(x) & np.isfinite(y) & (y > 0)
-            ax.plot(x[ok], y[ok], marker="o", color=col, label=name, lw=1.5)
+            ax.plot(x[ok], y[ok], marker="o", color=col, label=name, lw=1.5,
+                    ls="-" if name == s["engine"].iloc[0] else "--")
             if {f"{cost}_min", f"{cost}_max"} <= set(s.columns):
                 lo = s[f"{cost}_min"].astype(float).to_numpy()
                 hi = s[f"{cost}_max"].astype(float).to_numpy()
@@ -97,7 +100,8 @@ def plot_work_precision(table: pd.DataFrame, *, errors: Sequence[str] = ("worst_
             bad = np.isfinite(x) & np.isinf(y)
             if bad.any():
                 ax.plot(x[bad], np.full(bad.sum(), top), "x", color=col, ms=8)
-            for xi, yi, dt in zip(x[ok], y[ok], s["dt"].to_numpy()[ok]):
+            knob = s["knob_value"] if "knob_value" in s.columns else s["dt"]
+            for xi, yi, dt in zip(x[ok], y[ok], knob.to_numpy()[ok]):
                 ax.annotate(f"{float(dt):g}", (xi, yi), fontsize=7, color=col,
                             textcoords="offset points", xytext=(4, 3))
         front = t.loc[pareto_front(t, err, cost)].sort_values(cost)
@@ -115,7 +119,7 @@ def plot_work_precision(table: pd.DataFrame, *, errors: Sequence[str] = ("worst_
             ax.set_yscale("log")
             ax.set_ylim(bottom, top * 1.5)
         ax.set_xlabel("cost: process CPU s per simulated s [s/s]\n(median of repeats, bars "
-                      "min-max; left = cheaper; labels: dt [s])")
+                      "min-max; left = cheaper; labels: dt [s], or the engine's own knob)")
         ax.set_ylabel(_ERROR_LABELS.get(err, err) + "\n(down = more accurate)")
         ax.grid(True, which="both", lw=0.3, alpha=0.5)
         ax.legend(fontsize=8, loc="best")

@@ -257,3 +257,34 @@ def test_discrete_solvers_on_the_surviving_pulses(solver):
         err = r.summary.max_abs_phi / ref.summary.max_abs_phi - 1
         assert abs(err) < 0.03, (case.id, err)
         assert r.summary.max_sliding < 2e-3, (case.id, r.summary.max_sliding)
+
+
+# --- work-precision: CENIC's knob is the accuracy ------------------------------------------------
+def test_work_precision_sweeps_cenic_accuracy_beside_a_fixed_step_curve():
+    """rockbench.tradeoff sweeps Drake's own knob (DrakeBackend.precision_sweeps): CENIC's
+    accuracy at the default dt, and a fixed-step solver over the sweep's time steps; the
+    table's curve / knob columns keep them apart, and the figure draws them as two curves."""
+    import pandas as pd
+
+    from rockbench.report.tradeoff_figures import plot_work_precision
+    from rockbench.tradeoff import _curve, settings_grid
+
+    grid = settings_grid(["drake", "pymunk"], dts=[1e-3, 5e-4])
+    drake = [dict(s.overrides) for s in grid if s.engine == "drake"]
+    assert [d["accuracy"] for d in drake if "accuracy" in d] == [1e-2, 1e-3, 1e-4, 1e-5, 1e-6,
+                                                                 1e-7]
+    assert [(d["dt"], d["solver"]) for d in drake if "solver" in d] == [(1e-3, "similar"),
+                                                                       (5e-4, "similar")]
+    assert [dict(s.overrides) for s in grid if s.engine == "pymunk"] == [{"dt": 1e-3},
+                                                                         {"dt": 5e-4}]
+    cenic = next(s for s in grid if s.engine == "drake")
+    assert dict(cenic.refined().overrides)["accuracy"] == pytest.approx(1e-2 / 4)
+    rows = [dict(engine=s.engine, setting=s.label, dt=s.dt, cpu_per_sim_s=0.1 * (i + 1),
+                 worst_error=0.05 / (i + 1), **_curve(s.engine, s.label))
+            for i, s in enumerate(grid)]
+    t = pd.DataFrame(rows)
+    assert set(t["curve"]) == {"drake", "drake solver=similar", "pymunk"}
+    assert list(t.loc[t["curve"] == "drake", "knob"].unique()) == ["accuracy"]
+    fig = plot_work_precision(t, errors=("worst_error",))
+    labels = [ln.get_label() for ln in fig.axes[0].get_lines()]
+    assert {"drake", "drake solver=similar", "pymunk"} <= set(labels)
