@@ -268,7 +268,8 @@ def record_files(draw, folder: Path, clean: bool = False):
     kind = draw(st.sampled_from(["samples", "t_a", "at2"])) if clean else \
         draw(st.sampled_from(["samples", "t_a", "t_a", "shuffled", "non_uniform", "wrong_dt",
                                  "nan", "text", "empty", "binary", "one", "at2", "at2_npts",
-                                 "at2_dt", "missing", "folder"]))
+                                 "at2_dt", "at2_units", "at2_units", "at2_badunits",
+                                 "at2_nounits", "missing", "folder"]))
     units = draw(st.sampled_from(["g", "m/s2", "cm/s2"]))
     factor = {"g": 1.0, "m/s2": 1 / 9.80665, "cm/s2": 0.01 / 9.80665}[units]
     dt = draw(st.sampled_from([0.005, 0.01, 0.02]))
@@ -310,12 +311,26 @@ def record_files(draw, folder: Path, clean: bool = False):
         path = folder / f"rec_{kind}.AT2"
         npts = n + (7 if kind == "at2_npts" else 0)
         hdr_dt = 5.0 if kind == "at2_dt" else dt
-        body = "\n".join(" ".join(f"{v:.5f}" for v in acc[i:i + 5]) for i in range(0, n, 5))
-        path.write_text(f"PEER\nfuzz\nACCELERATION TIME SERIES IN UNITS OF G\n"
+        # issue 22: the header's units, in the spellings agencies use (or unknown, or none)
+        spelled, per_g = "UNITS OF G", 1.0
+        if kind == "at2_units":
+            spelled, per_g = draw(st.sampled_from([
+                ("UNITS: CM/S^2", 980.665), ("UNITS OF CM/SEC/SEC", 980.665),
+                ("Units: gal", 980.665), ("UNITS = m/s^2", 9.80665), ("units: mm/s2", 9806.65),
+                ("ACCELERATION IN CM/S/S", 980.665), ("UNITS OF g", 1.0)]))
+        elif kind == "at2_badunits":
+            spelled = draw(st.sampled_from(["UNITS: CM/S", "UNITS OF KG", "UNITS: furlong/s^2",
+                                            "UNITS = mgal"]))
+        elif kind == "at2_nounits":
+            spelled = "ACCELERATION TIME SERIES"
+        values = acc * per_g
+        body = "\n".join(" ".join(f"{v:.5f}" for v in values[i:i + 5])
+                         for i in range(0, n, 5))
+        path.write_text(f"PEER\nfuzz\n{spelled}\n"
                         f"NPTS= {npts}, DT= {hdr_dt:.4f} SEC\n{body}\n")
         opts = []
-        valid = kind == "at2"
-        pga_g = float(np.max(np.abs(acc))) if valid else None
+        valid = kind in ("at2", "at2_units")
+        pga_g = float(np.max(np.abs(np.round(values, 5)))) / per_g if valid else None
     elif kind == "missing":
         path = folder / "nowhere.txt"
     elif kind == "folder":
@@ -695,3 +710,71 @@ def test_fuzz_api_compare_and_map(data):
 @given(data=st.data())
 def test_fuzz_api_compare_and_map_slow(data):
     api_compare_and_map_test(data)
+
+
+# ==============================================================================================
+# Engine settings at and beyond what each engine can take (issue 22)
+# ==============================================================================================
+#: (engine, setting, its valid range [lo, hi], integer?): the ranges of the Settings classes
+#: (docs/engines/<engine>.md). Values past a C int (2^31) were OverflowErrors and "XML number
+#: too large" reported as "diverged"; a tolerance below round-off never converged.
+SETTING_RANGES = [
+    ("pymunk", "iterations", 1, 10_000, True),
+    ("mujoco", "iterations", 1, 10_000, True),
+    ("mujoco", "noslip_iterations", 0, 10_000, True),
+    ("mujoco", "impedance", 1e-4, 0.9999, False),
+    ("mujoco", "tolerance", 0.0, 1e-3, False),
+    ("pybullet", "solver_iterations", 1, 10_000, True),
+    ("pybullet", "contact_breaking_threshold", 1e-9, 0.05, False),
+    ("opensees", "iterations", 1, 10_000, True),
+    ("opensees", "tolerance", 1e-12, 1e-4, False),
+    ("opensees", "springs", 2, 101, True),
+]
+#: A run that returns must not have "diverged" because the engine refused a value.
+ENGINE_REFUSAL = re.compile(r"^(\w*Error|\w*Exception|XML)|too large|does not fit|"
+                            r"greater than maximum")
+
+
+@st.composite
+def setting_values(draw):
+    engine, key, lo, hi, integer = draw(st.sampled_from(SETTING_RANGES))
+    value = draw(st.sampled_from([lo, hi, 2 ** 31 - 1, 2 ** 31, 10 ** 12, -1, 0, 1e300, 1e-300,
+                                  NAN, INF, "abc", None, True, 2.5, hi * 1.5 + 1]))
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
+        return engine, key, value, False
+    inside = lo <= value <= hi and (not integer or float(value).is_integer())
+    if integer and isinstance(value, float) and inside:
+        return engine, key, value, None        # 2.0 for an integer: either answer is right
+    return engine, key, value, inside
+
+
+def api_settings_test(data):
+    engine, key, value, valid = data.draw(setting_values())
+    from rockbench.engines import get_backend
+
+    ok, why = get_backend(engine).available()
+    if not ok:
+        pytest.skip(why)
+    scene = rb.load_scene("housner-block")
+
+    def sane(result):
+        assert not (result.status == "diverged" and ENGINE_REFUSAL.search(result.reason or "")), (
+            f"{engine} {key}={value!r}: the engine refused a value the settings accepted: "
+            f"{result.reason}")
+
+    check_api("api.settings", valid,
+              lambda: rb.run(scene, None, engine=engine, phi0=0.3 * scene.alpha,
+                             duration=0.02, **{key: value}), sane)
+
+
+@FAST
+@given(data=st.data())
+def test_fuzz_engine_settings(data):
+    api_settings_test(data)
+
+
+@pytest.mark.slow
+@SLOW
+@given(data=st.data())
+def test_fuzz_engine_settings_slow(data):
+    api_settings_test(data)

@@ -68,16 +68,23 @@ from typing import ClassVar
 import numpy as np
 
 from ..constants import G
-from ..errors import (ParameterError, check_choice, check_finite, check_int, check_positive,
+from ..errors import (ParameterError, check_choice, check_finite, check_int,
                       check_range)
 from ._quiet import quiet_import
 from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, DeviceGeometry, PointForce, net_wrenches
 
-__all__ = ["OpenseesBackend", "OpenseesSettings", "DAMPING_MODELS", "INTEGRATORS", "SEAT"]
+__all__ = ["OpenseesBackend", "OpenseesSettings", "DAMPING_MODELS", "INTEGRATORS", "SEAT",
+           "MAX_ITERATIONS", "MIN_TOLERANCE"]
 
 #: Contact damping models: none; Rayleigh on the toes' committed stiffness; Rayleigh on mass.
 DAMPING_MODELS = ("none", "stiffness", "mass")
+#: The most Newton iterations per increment: OpenSees' counter is a C int (2^31 wrapped and
+#: every run "did not converge at t = 0", reported as diverged); 25 converge every case.
+MAX_ITERATIONS = 10_000
+#: The smallest convergence tolerance [m]: the displacement-increment norm of a structure of
+#: metres cannot fall below round-off (1e-300 never converged: "diverged" at t = 0).
+MIN_TOLERANCE = 1e-12
 #: Time integrators (OpenSees ``Newmark gamma beta`` or ``HHT alpha``).
 INTEGRATORS = ("newmark", "hht")
 _DEVICE_MODES = ("native", "forces")
@@ -116,8 +123,12 @@ class OpenseesSettings(EngineSettings):
     hht_alpha : HHT alpha in OpenSees' convention, in [2/3, 1] (1: no numerical damping).
     member_ratio : stiffness of the rigid members / toe stiffness [-], in [1, 1e6]
         (default 100).
-    iterations : Newton iterations per increment, integer >= 1 (default 25).
-    tolerance : displacement-increment norm of convergence [m], > 0 (default 1e-8).
+    iterations : Newton iterations per increment, an integer in [1, :data:`MAX_ITERATIONS` =
+        1e4] (default 25).
+    tolerance : displacement-increment norm of convergence [m], in [:data:`MIN_TOLERANCE` =
+        1e-12, 1e-4] (default 1e-8; below round-off it never converges, above 1e-4 m = a tenth
+        of the smallest length of a scene Newton stops at its first iterate: 1e300 reported a
+        run ok).
     halvings : how many times a non-converged increment is halved before the run is
         reported diverged, integer in [0, 10] (default 4: down to dt / 16).
     devices : "native" (default: corotational truss tendons removed at fracture, dampers per
@@ -161,8 +172,8 @@ class OpenseesSettings(EngineSettings):
             raise ParameterError("beta", self.beta, f"in [gamma / 2 = {g / 2.0:g}, 2]")
         check_range("hht_alpha", self.hht_alpha, 2.0 / 3.0, 1.0)
         check_range("member_ratio", self.member_ratio, 1.0, 1e6)
-        check_int("iterations", self.iterations, 1)
-        check_positive("tolerance", self.tolerance)
+        check_int("iterations", self.iterations, 1, MAX_ITERATIONS)
+        check_range("tolerance", self.tolerance, MIN_TOLERANCE, 1e-4)
         check_int("halvings", self.halvings, 0, 10)
         check_choice("devices", self.devices, _DEVICE_MODES)
         check_choice("damper", self.damper, DAMPER_MODELS)
@@ -392,7 +403,7 @@ class OpenseesBackend(EngineBackend):
             return
         if level >= int(self.settings.halvings):
             raise NoConvergence(
-                f"OpenSees did not converge at t = {self._ops.getTime():.6g} s (increment "
+                f"OpenSees did not converge {self._ops.getTime():.6g} s into the run (increment "
                 f"{dt:.3g} s after {level} halvings of dt; settings iterations="
                 f"{self.settings.iterations}, tolerance={self.settings.tolerance:g} m)")
         self.halved += 1
