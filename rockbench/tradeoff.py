@@ -54,8 +54,8 @@ from .validation import (ValidationCase, _analytic, _scene_from_key,
                          _scene_key, overturn_threshold, validation_set)
 
 __all__ = ["DEFAULT_DTS", "precision_sweeps", "ValidationCase", "validation_set",
-           "overturn_threshold", "Setting", "settings_grid", "tradeoff", "Tradeoff", "summarize", "classify_error",
-           "RUN_COLUMNS", "TABLE_COLUMNS", "VERDICTS", "case_error"]
+           "overturn_threshold", "Setting", "settings_grid", "tradeoff", "Tradeoff", "summarize",
+           "classify_error", "RUN_COLUMNS", "TABLE_COLUMNS", "VERDICTS", "case_error"]
 
 #: Default time steps [s] of the work-precision sweep.
 DEFAULT_DTS: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
