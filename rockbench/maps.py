@@ -755,7 +755,8 @@ def _engine_rows(scene_ref: Any, overrides: dict | None, engine: str, settings: 
               "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W}}
              for sh, sg, A, W in cells]
     rows = run_cases(cases, on_rows=(None if on_rows is None else
-                                     (lambda rs: on_rows(_map_rows(rs)))), **execution)
+                                     (lambda rs: on_rows(_map_rows(rs)))), keep="summary",
+                     **execution)
     return _map_rows(rows.to_dict("records"))
 
 

@@ -28,7 +28,7 @@ REFERENCE = "analytic"
 
 def run(scene: Scene, motion=None, *, engine: str = "analytic",
         duration: float | None = None, phi0: float = 0.0, settings: Any = None,
-        **setting_overrides: Any) -> Result:
+        keep: str = "all", **setting_overrides: Any) -> Result:
     """Simulate ``scene`` under ``motion`` with one backend.
 
     Parameters
@@ -44,17 +44,24 @@ def run(scene: Scene, motion=None, *, engine: str = "analytic",
         Initial rotation [rad] (free rocking).
     settings : the backend's Settings, optional; ``setting_overrides`` replace single fields
         (e.g. ``dt=2e-4``).
+    keep : "all" (default: the Result) or "summary" (engines only: what a map keeps, an
+        :class:`~rockbench.engines.loop.Outcome` with the same summary, no history frame).
     """
     _check_scene(scene)
     _check_motion(motion)
     if not isinstance(engine, str):
         raise ParameterError("engine", engine, f"a backend name: {', '.join(REGISTRY)}")
     backend = get_backend(engine)(scene, settings, **setting_overrides)
+    if keep != "all" and (keep != "summary" or engine == REFERENCE):
+        raise ParameterError("keep", keep, "'all', or 'summary' for an engine (not the "
+                                           "analytic reference)")
     # the run's size (samples, steps) is checked before the backend allocates anything
     run_window(scene, motion, duration, phi0, settings=backend.settings)
     # backends get plain floats (run_window accepted what float() converts, e.g. "0.1")
     phi0 = check_finite("phi0", phi0)
     duration = None if duration is None else check_positive("duration", duration)
+    if keep == "summary":
+        return backend.run(motion, duration=duration, phi0=phi0, keep=keep)
     return backend.run(motion, duration=duration, phi0=phi0)
 
 

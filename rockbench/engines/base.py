@@ -285,7 +285,10 @@ class EngineBackend(Backend):
         self.poses0 = initial_poses(self.scene, phi0)
         self._build()
 
-    def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
+    def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0,
+            keep: str = "all") -> Result:
+        """The run's Result; ``keep="summary"``: only what a map keeps, an
+        :class:`~rockbench.engines.loop.Outcome` (no history or events frames)."""
         from .loop import device_geometry, finish, step_run
 
         t0, t_end = run_window(self.scene, motion, duration, phi0, settings=self.settings)
@@ -299,6 +302,6 @@ class EngineBackend(Backend):
         stepped = step_run(self, motion, t0, t_end, phi0)
         result = finish(self.scene, motion, self.settings, self.specs, stepped, phi0=phi0,
                         t0=t0, backend_name=self.name, engine_version=self.version(),
-                        devices=device_geometry(self))
+                        devices=device_geometry(self), keep=keep)
         result.cost.cpu_s = time.process_time() - cpu
         return result

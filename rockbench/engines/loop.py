@@ -46,7 +46,8 @@ from .bodies import BodySpec
 from .contacts import ContactProbe
 from .devices import DAMPER_MODELS, DeviceGeometry
 
-__all__ = ["Stepped", "step_run", "finish", "SampleChecks", "device_geometry", "PROBE_CHUNK"]
+__all__ = ["Stepped", "Outcome", "step_run", "finish", "SampleChecks", "device_geometry",
+           "PROBE_CHUNK"]
 
 #: Output samples probed together (vectorized) for the penetration / sliding divergence check.
 PROBE_CHUNK = 500
@@ -89,6 +90,30 @@ class Stepped:
     max_sliding: float = 0.0
     steps: int = 0
     wall_s: float = 0.0
+
+
+@dataclass
+class Outcome:
+    """What a map keeps of an engine run (:func:`finish` with ``keep="summary"``): the
+    :class:`~rockbench.result.Summary` and :class:`~rockbench.result.Cost` a full Result would
+    hold, the impact events as rows (dicts of EVENT_COLUMNS, in time order), the backend's name
+    and settings (with ``engine_version``); no history, no events frame."""
+
+    backend: str
+    summary: Summary
+    cost: Cost
+    impacts: list[dict[str, Any]]
+    settings: dict[str, Any]
+
+    @property
+    def status(self) -> str:
+        return self.summary.status
+
+
+def _eta(row: dict[str, Any]) -> float:
+    """An impact row's eta as the events frame holds it (missing -> NaN)."""
+    e = row.get("eta")
+    return math.nan if e is None else float(e)
 
 
 def device_geometry(backend) -> DeviceGeometry | None:
@@ -395,12 +420,18 @@ class SampleChecks:
 
 def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepped, *,
            phi0: float, t0: float, backend_name: str, engine_version: str,
-           devices: DeviceGeometry | None) -> Result:
+           devices: DeviceGeometry | None, keep: str = "all") -> Result | Outcome:
     """The Result of an engine run from its samples on the output grid (see :class:`Stepped`):
     history with contact diagnostics, events (uplift, impacts with the effective eta, fracture,
     overturn), post-run divergence checks (penetration, sliding, energy gained between peaks
     after the ground motion), summary and cost. ``settings`` is the backend's Settings
-    (``uplift_tol``, ``max_penetration``, ``max_sliding``, ``energy_gain_tol``)."""
+    (``uplift_tol``, ``max_penetration``, ``max_sliding``, ``energy_gain_tol``).
+
+    ``keep="summary"`` (what a map keeps): the same arithmetic, without building the history
+    and events frames; returns an :class:`Outcome` (summary, cost, impact rows) whose summary
+    equals the full Result's field by field (``tests/engines/test_map_path.py``)."""
+    if keep not in ("all", "summary"):
+        raise ParameterError("keep", keep, "'all' (the Result) or 'summary' (an Outcome)")
     cfg = settings
     alpha = scene.alpha
     ref = reference_of(scene)
@@ -436,8 +467,9 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     max_pen = max(stepped.max_penetration, pen_pre if overturned else pen_all)
     max_slide = max(stepped.max_sliding, sl_pre if overturned else sl_all)
     opened = bool(op.any())
-    history = _history(scene, motion, tt, S, modes, intact, devices, stepped.native_report,
-                       pen, sl)
+    history = (_history(scene, motion, tt, S, modes, intact, devices, stepped.native_report,
+                        pen, sl) if keep == "all" else None)
+    intact_b = intact.astype(bool)
     ev = list(stepped.events)
     if collapse is not None:
         ev.append(dict(t=t_over, kind="overturn", phi=float(ph[collapse]),
@@ -481,8 +513,8 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                                           f"{cfg.max_sliding:g} m")
         else:
             quiet = t0 if motion is None else float(motion.t_end)
-            reason = _peak_energy_growth(exc, tt, ph, history["devices_intact"].to_numpy(),
-                                         dyn, quiet, cfg.energy_gain_tol, alpha)
+            reason = _peak_energy_growth(exc, tt, ph, intact_b, dyn, quiet,
+                                         cfg.energy_gain_tol, alpha)
             if reason is not None:
                 status = "diverged"
             else:
@@ -501,26 +533,30 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                            phidot_before=float(pd_[-1]), phidot_after=float(pd_[-1]),
                            direction=1 if ph[-1] > 0 else -1))
         reason = f"{reason}; {note}" if note else reason
-    events = events_frame(sorted(ev, key=lambda r: r["t"]))
-    impacts = events[events["kind"] == "impact"]
+    rows = sorted(ev, key=lambda r: r["t"])
+    impacts = [r for r in rows if r["kind"] == "impact"]
     max_abs = float(np.max(np.abs(ph))) if ph.size else 0.0
-    ups = events[events["kind"] == "uplift"]
-    uplifted = bool(len(ups)) or (phi0 != 0.0 and len(history) > 0)
-    t_up = float(ups["t"].iloc[0]) if len(ups) else (t0 if uplifted else None)
+    ups = [r for r in rows if r["kind"] == "uplift"]
+    uplifted = bool(len(ups)) or (phi0 != 0.0 and n > 0)
+    t_up = float(ups[0]["t"]) if len(ups) else (t0 if uplifted else None)
     summary = Summary(
         max_abs_phi=max_abs, max_abs_phi_over_alpha=max_abs / alpha,
         overturned=overturned, t_overturn=t_over,
-        exceeded_critical=overturned or _exceeded(ph, crit, history),
+        exceeded_critical=overturned or _exceeded(ph, crit, intact_b),
         uplifted=uplifted, t_uplift=t_up,
-        n_impacts=int(len(impacts)), fractured=stepped.fractured,
+        n_impacts=len(impacts), fractured=stepped.fractured,
         t_fracture=stepped.t_fracture, status=status, reason=reason,
-        eta_measured=[float(x) for x in impacts["eta"].to_numpy()],
+        eta_measured=[_eta(r) for r in impacts],
         max_penetration=max(max_pen, pen_all), max_sliding=max(max_slide, sl_all),
         contact_opened=opened)
     sim_time = (float(tt[-1]) - t0) if tt.size else 0.0
     cost = Cost(wall_s=stepped.wall_s, sim_time=sim_time, steps=stepped.steps)
     out_settings = asdict(cfg)
     out_settings["engine_version"] = engine_version
+    if keep == "summary":
+        return Outcome(backend=backend_name, summary=summary, cost=cost, impacts=impacts,
+                       settings=out_settings)
+    events = events_frame(rows)
     return Result(backend=backend_name, scene=scene,
                   motion=motion.describe() if motion is not None else {"kind": "none"},
                   history=history, events=events, summary=summary, cost=cost,
@@ -769,11 +805,11 @@ def _falling(phi: np.ndarray, intact: np.ndarray, crit: dict) -> np.ndarray:
     return out
 
 
-def _exceeded(phis: np.ndarray, crit: dict, history: pd.DataFrame) -> bool:
-    """Whether |phi| exceeded the critical angle of its direction and device state."""
-    if not len(history):
+def _exceeded(phis: np.ndarray, crit: dict, intact: np.ndarray) -> bool:
+    """Whether |phi| exceeded the critical angle of its direction and device state
+    (``intact``: the devices' state at each sample)."""
+    if not len(phis):
         return False
-    intact = history["devices_intact"].to_numpy()
     for s in (1, -1):
         for flag in (True, False):
             c = crit[(s, flag)]

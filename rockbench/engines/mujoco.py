@@ -526,8 +526,13 @@ def batch_refusal(scene, settings: MujocoSettings) -> str | None:
     return None
 
 
+#: Steps of one ``mujoco.rollout`` call of a case on the single-thread batched path, between
+#: which the overturn verdict is checked (a case that overturned is not simulated further).
+VERDICT_CHUNK = 1000
+
+
 def run_batch(scene, motions, *, duration: float | None = None, settings=None,
-              nthread: int | None = None, **overrides) -> list:
+              nthread: int | None = None, keep: str = "all", **overrides) -> list:
     """Run ``scene`` under each ground motion of ``motions`` (from rest, phi0 = 0) in MuJoCo,
     with the whole run of every case inside ``mujoco.rollout`` (threads: ``nthread``, default
     one per core), and return one :class:`~rockbench.result.Result` per motion - the same
@@ -538,7 +543,13 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
 
     Raises ParameterError naming the reason when :func:`batch_refusal` refuses the scene
     (callers fall back to the plain path). ``duration`` [s] as in ``run`` (None: each motion's
-    length + 10 s)."""
+    length + 10 s). ``keep``: as in ``run`` ("summary": an Outcome per motion).
+
+    With one thread (``nthread=1``, what sweeps use: one process per core), each case is rolled
+    out in calls of :data:`VERDICT_CHUNK` steps, its solver warm start carried from one call to
+    the next (bit for bit the states of one long call), and stops at the first call in which it
+    overturned: steps after the verdict are not paid. With several threads the cases run to
+    their end in one call (threads share the cases, not a case's steps)."""
     import time
 
     import mujoco
@@ -583,6 +594,18 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
             t_mid = np.concatenate(([t0], t_steps[:-1])) + 0.5 * dt
             gx = -np.asarray(motions[i].acceleration(t_mid), dtype=float)
             ctrl[j][:, 0:3 * nb:3] = gx[:, None] * masses[None, :]
+        if nthread == 1:
+            for j, i in enumerate(idx):
+                wall = time.perf_counter()
+                states = _rollout_to_verdict(runner, m, datas[0], state0, ctrl[j], n_steps,
+                                             scene.fall_angles)
+                wall = time.perf_counter() - wall
+                q = np.concatenate((state0[None, 1:1 + nq], states[:, 1:1 + nq]))
+                v = np.concatenate((state0[None, 1 + nq:1 + nq + nv],
+                                    states[:, 1 + nq:1 + nq + nv]))
+                results[i] = _finish_batch(backend, motions[i], windows[i], q, v, wall,
+                                           version, keep)
+            continue
         init = np.repeat(state0[None, :], len(idx), axis=0)
         wall = time.perf_counter()
         state, _ = runner.rollout([m] * len(idx), datas, init, ctrl,
@@ -593,16 +616,44 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
             q = np.concatenate((state0[None, 1:1 + nq], state[j, :, 1:1 + nq]))
             v = np.concatenate((state0[None, 1 + nq:1 + nq + nv],
                                 state[j, :, 1 + nq:1 + nq + nv]))
-            results[i] = _finish_batch(backend, motions[i], windows[i], q, v, wall, version)
+            results[i] = _finish_batch(backend, motions[i], windows[i], q, v, wall, version,
+                                       keep)
     share = (time.process_time() - cpu) / max(len(motions), 1)
     for r in results:
         r.cost.cpu_s = share          # the batch's process CPU time, shared equally
     return results
 
 
-def _finish_batch(backend, motion, window, q, v, wall: float, version: str):
-    """Step states (n_steps + 1, nq), (.., nv) of one batched case -> its Result, through the
-    loop's sampling rules (overturn stop, samples on the output grid, sample checks)."""
+def _rollout_to_verdict(runner, m, d, state0: np.ndarray, ctrl: np.ndarray, n_steps: int,
+                        fall: dict) -> np.ndarray:
+    """The rollout states (k, nstate) of one case from ``state0`` under ``ctrl`` (n_steps,
+    nv), in calls of :data:`VERDICT_CHUNK` steps on the data ``d``, carrying the solver's warm
+    start, until the call in which phi (qpos[2], the first body's rotation) reached a fall angle
+    of ``fall`` (k < n_steps) or the end (k = n_steps)."""
+    import mujoco
+
+    spec = mujoco.mjtState.mjSTATE_QFRC_APPLIED
+    out = np.empty((n_steps, state0.size))
+    init, warm, k = state0[None, :], None, 0
+    while k < n_steps:
+        n = min(VERDICT_CHUNK, n_steps - k)
+        st, _ = runner.rollout([m], [d], init, ctrl[None, k:k + n], control_spec=spec,
+                               nstep=n, initial_warmstart=warm)
+        out[k:k + n] = st[0]
+        k += n
+        phi = st[0, :, 1 + 2]
+        if np.any((phi >= fall[1]) | (-phi >= fall[-1])):
+            break
+        init, warm = st[:, -1], d.qacc_warmstart.copy()[None, :]
+    return out[:k]
+
+
+def _finish_batch(backend, motion, window, q, v, wall: float, version: str,
+                  keep: str = "all"):
+    """Step states (k + 1, nq), (.., nv) of one batched case (k <= n_steps steps: a case
+    stopped at its verdict has fewer) -> its Result (``keep="summary"``: Outcome), through the
+    loop's sampling rules (overturn stop, samples on the output grid, sample checks); ``wall``
+    [s]: the rollout's time for the k steps."""
     from ..analytic.reference import reference_of
     from ..result import output_grid
     from .contacts import ContactProbe
@@ -610,18 +661,19 @@ def _finish_batch(backend, motion, window, q, v, wall: float, version: str):
     scene, cfg = backend.scene, backend.settings
     t0, t_end, n_steps = window
     nb = len(backend.specs)
-    S = np.empty((n_steps + 1, nb, 6))
+    n_done = q.shape[0] - 1                    # steps simulated
+    S = np.empty((n_done + 1, nb, 6))
     q3, v3 = q.reshape(-1, nb, 3), v.reshape(-1, nb, 3)
     S[:, :, 0:2] = backend._rest[None] + q3[:, :, 0:2]
     S[:, :, 2] = q3[:, :, 2]
     S[:, :, 3:6] = v3
-    times = np.concatenate(([t0], t0 + np.arange(1, n_steps + 1) * cfg.dt))
+    times = np.concatenate(([t0], t0 + np.arange(1, n_done + 1) * cfg.dt))
     phi = S[:, 0, 2]
     fall_p, fall_n = scene.fall_angles[1], scene.fall_angles[-1]
     over = np.flatnonzero((phi >= fall_p) | (-phi >= fall_n))
     out = Stepped(grid=output_grid(t0, t_end, cfg.output_dt), states=S[:0],
                   intact=np.zeros(0, bool))
-    last = n_steps
+    last = n_done
     if over.size:
         last = int(over[0])
         out.overturned, out.t_overturn = True, float(times[last])
@@ -634,8 +686,8 @@ def _finish_batch(backend, motion, window, q, v, wall: float, version: str):
     grid = out.grid
     tol = 1e-9 * cfg.dt
     k = np.searchsorted(times[:last + 1], grid - tol, side="left")
-    keep = k <= last
-    grid_k, k = grid[keep], k[keep]
+    inside = k <= last
+    grid_k, k = grid[inside], k[inside]
     exact = (k == 0) | (times[k] == grid_k)
     km = np.maximum(k - 1, 0)
     w = np.where(exact, 1.0, (grid_k - times[km]) / np.where(exact, 1.0, times[k] - times[km]))
@@ -643,7 +695,7 @@ def _finish_batch(backend, motion, window, q, v, wall: float, version: str):
                        S[km] + w[:, None, None] * (S[k] - S[km]))
     out.states = samples
     out.intact = np.full(len(samples), scene.has_devices)
-    out.steps, out.wall_s = last, wall * last / max(n_steps, 1)
+    out.steps, out.wall_s = last, wall * last / max(n_done, 1)
     checker = SampleChecks(cfg, backend.specs, ContactProbe(scene, backend.specs),
                             reference_of(scene).critical, cfg.uplift_tol * scene.alpha,
                             free=False)
@@ -660,4 +712,4 @@ def _finish_batch(backend, motion, window, q, v, wall: float, version: str):
         out.native_report = [(list(devices.k * e), [0.0, 0.0]) for e in el]
     return finish(scene, motion, cfg, backend.specs, out, phi0=0.0, t0=t0,
                   backend_name="mujoco", engine_version=version,
-                  devices=devices)
+                  devices=devices, keep=keep)

@@ -29,8 +29,15 @@ def _now() -> str:
 
 
 def _result_fields(result) -> dict[str, Any]:
+    """The row fields of a Result, or of an :class:`~rockbench.engines.loop.Outcome` (what a
+    map keeps: the same summary and cost, the impacts as rows) - the same numbers."""
     s, c = result.summary, result.cost
-    imp = result.impacts()
+    if isinstance(result.impacts, list):          # an Outcome
+        direction = np.array([r.get("direction") or 0 for r in result.impacts], dtype=np.int64)
+        eta = np.array([r.get("eta") for r in result.impacts], dtype=float)
+    else:
+        imp = result.impacts()
+        direction, eta = imp["direction"].to_numpy(), imp["eta"].to_numpy(dtype=float)
     row: dict[str, Any] = {"status": s.status, "reason": s.reason or ""}
     for k in ("max_abs_phi", "max_abs_phi_over_alpha", "overturned", "t_overturn",
               "exceeded_critical", "uplifted", "t_uplift", "n_impacts", "fractured",
@@ -38,7 +45,7 @@ def _result_fields(result) -> dict[str, Any]:
         v = getattr(s, k)
         row[k] = v.item() if isinstance(v, np.generic) else v
     for d, tag in ((1, "ccw"), (-1, "cw")):
-        e = imp.loc[imp["direction"] == d, "eta"].to_numpy(dtype=float)
+        e = eta[direction == d]
         e = e[np.isfinite(e)]
         row[f"eta_{tag}_mean"] = float(e.mean()) if e.size else math.nan
     row.update(wall_s=float(c.wall_s), sim_time=float(c.sim_time), steps=int(c.steps),
@@ -66,9 +73,37 @@ def _error_row(norm: dict[str, Any], reason: str) -> dict[str, Any]:
     return row
 
 
-def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
+#: Scenes loaded in this process, by case scene and overrides (a scene file: and its
+#: modification time): loading validates the mechanism (its geometric limits, ~20 ms of CPU
+#: for a frame), which a map would otherwise pay in every cell. Scenes are frozen.
+_SCENES: dict[str, Any] = {}
+
+
+def _case_scene(norm: dict[str, Any]):
+    """:func:`load_case_scene`, loaded once per process for each scene (and file version)."""
+    sc = norm["scene"]
+    stamp = None
+    if isinstance(sc, str):
+        try:
+            stamp = Path(sc).stat().st_mtime_ns
+        except (OSError, ValueError):
+            stamp = None
+    key = json.dumps([sc, norm["overrides"], stamp], sort_keys=True, default=str)
+    if key not in _SCENES:
+        if len(_SCENES) >= 16:
+            _SCENES.clear()
+        _SCENES[key] = load_case_scene(norm)
+    return _SCENES[key]
+
+
+KEEP = ("all", "summary")
+
+
+def run_case(case: Mapping[str, Any], keep: str = "all") -> dict[str, Any]:
     """Run one case; return its row (never raises for a failure of the run itself: an
     exception becomes status ``"error"`` with ``reason`` = the exception's type and message).
+    ``keep="summary"`` (engines; what maps use): the run keeps only its summary
+    (:func:`rockbench.engines.loop.finish`), the row is the same.
 
     Row keys: ``case_id``, the flattened case, ``status``, ``reason``, the Result's summary
     (``max_abs_phi`` [rad], ``max_abs_phi_over_alpha``, ``overturned``, ``t_overturn`` [s], ...),
@@ -83,10 +118,10 @@ def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
         from ..runner import run
         from ..scene.motion import motion_from_spec
 
-        scene = load_case_scene(norm)
+        scene = _case_scene(norm)
         motion = motion_from_spec(norm["motion"], scene.structure)
         result = run(scene, motion, engine=norm["engine"], duration=norm["duration"],
-                     phi0=norm["phi0"], **norm["settings"])
+                     phi0=norm["phi0"], keep=keep, **norm["settings"])
         row.update(_result_fields(result))
     except Exception as e:  # a failing case is data, not a crash of the sweep
         row.update(status="error", reason=f"{type(e).__name__}: {e}")
@@ -95,10 +130,10 @@ def run_case(case: Mapping[str, Any]) -> dict[str, Any]:
     return row
 
 
-def _run_normalized(norm: dict[str, Any]) -> dict[str, Any]:
+def _run_normalized(norm: dict[str, Any], keep: str = "all") -> dict[str, Any]:
     """What the executor runs: :func:`run_case` looked up at call time (so that it can be
     replaced, e.g. by a test)."""
-    return run_case(norm)
+    return run_case(norm) if keep == "all" else run_case(norm, keep=keep)
 
 
 #: MuJoCo cases run together in one ``mujoco.rollout`` call (one executor item).
@@ -114,7 +149,8 @@ def _batch_key(norm: dict[str, Any]) -> str | None:
                       sort_keys=True)
 
 
-def run_batch_cases(norms: list[dict[str, Any]], nthread: int | None = 1) -> list[dict]:
+def run_batch_cases(norms: list[dict[str, Any]], nthread: int | None = 1,
+                    keep: str = "all") -> list[dict]:
     """Rows of MuJoCo cases of one batch group (:func:`_batch_key`) run together by
     :func:`rockbench.engines.mujoco.run_batch`; a scene the batched path refuses (dampers,
     fracture) falls back to :func:`run_case` one by one. ``run_s`` of each row is its share
@@ -125,15 +161,15 @@ def run_batch_cases(norms: list[dict[str, Any]], nthread: int | None = 1) -> lis
     t = time.perf_counter()
     first = norms[0]
     try:
-        scene = load_case_scene(first)
+        scene = _case_scene(first)
         why = batch_refusal(scene, MujocoBackend(scene, **first["settings"]).settings)
         if why is not None:
-            return [run_case(n) for n in norms]
+            return [_run_normalized(n, keep) for n in norms]
         motions = [motion_from_spec(n["motion"], scene.structure) for n in norms]
         results = run_batch(scene, motions, duration=first["duration"], nthread=nthread,
-                            **first["settings"])
+                            keep=keep, **first["settings"])
     except Exception:  # anything the batch cannot do: the plain path, case by case
-        return [run_case(n) for n in norms]
+        return [_run_normalized(n, keep) for n in norms]
     share = (time.perf_counter() - t) / len(norms)
     rows = []
     for n, r in zip(norms, results):
@@ -146,9 +182,10 @@ def run_batch_cases(norms: list[dict[str, Any]], nthread: int | None = 1) -> lis
 
 
 def _run_item(item: tuple) -> Any:
-    """An executor item: ("case", norm) -> row, ("batch", [norm, ...]) -> rows."""
-    kind, payload = item
-    return run_batch_cases(payload) if kind == "batch" else _run_normalized(payload)
+    """An executor item: ("case", norm, keep) -> row, ("batch", [norm, ...], keep) -> rows."""
+    kind, payload, keep = item
+    return (run_batch_cases(payload, keep=keep) if kind == "batch"
+            else _run_normalized(payload, keep))
 
 
 # =========================================================================================
@@ -203,7 +240,8 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
               executor: str = "process", workers: int | None = None,
               dask_address: str | None = None, progress: bool = True,
               retry_errors: bool = False, batch: bool = True,
-              on_rows: Callable[[list[dict[str, Any]]], None] | None = None) -> pd.DataFrame:
+              on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+              keep: str = "all") -> pd.DataFrame:
     """Run every case and return one row per case, in input order (``docs/sweeps.md``).
 
     Parameters
@@ -229,12 +267,18 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
     on_rows : callable, optional
         Called in this process with the rows of each finished executor item (one case, or a
         MuJoCo batch) as it finishes, after the store has them (e.g. to keep them elsewhere).
+    keep : {"all", "summary"}
+        "summary" (engine cases only; what maps use): each run keeps only its summary - the
+        same rows, without building a history frame (:func:`rockbench.engines.loop.finish`).
 
     Columns: ``case_id``, the flattened case (``scene``, ``overrides.<k>``, ``engine``,
     ``settings.<k>``, ``motion.kind``, ``motion.<k>``, ``phi0`` [rad], ``duration`` [s]), then
     the run's fields (see :func:`run_case`). :data:`TIMING_COLUMNS` vary from run to run.
     """
     check_options(executor, workers, dask_address)
+    if keep not in KEEP:
+        from ..errors import ParameterError
+        raise ParameterError("keep", keep, "'all' or 'summary'")
     norms = [normalize_case(c) for c in cases]
     ids = [case_id(n) for n in norms]
 
@@ -264,7 +308,7 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
     for cid, n in todo.items():
         key = _batch_key(n) if batch else None
         if key is None:
-            items.append((cid, ("case", n)))
+            items.append((cid, ("case", n, keep)))
         else:
             groups.setdefault(key, []).append((cid, n))
     ids_of: dict[str, list[str]] = {}
@@ -273,7 +317,7 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
             chunk = members[i:i + BATCH_SIZE]
             key = f"batch-{chunk[0][0]}-{len(chunk)}"
             ids_of[key] = [c for c, _ in chunk]
-            items.append((key, ("batch", [n for _, n in chunk])))
+            items.append((key, ("batch", [n for _, n in chunk], keep)))
 
     def on_item(key: str, out: Any) -> None:
         if key in ids_of:
@@ -285,7 +329,7 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
             on_rows(list(out) if key in ids_of else [out])
 
     def crashed(item: tuple, reason: str) -> Any:
-        kind, payload = item
+        kind, payload = item[:2]
         if kind == "batch":
             return [_error_row(n, reason) for n in payload]
         return _error_row(payload, reason)
