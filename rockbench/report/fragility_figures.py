@@ -46,12 +46,18 @@ def _empirical(runs: pd.DataFrame, backend: str) -> tuple[np.ndarray, np.ndarray
 def plot_fragility(analysis: Mapping[str, Any], runs: pd.DataFrame, *,
                    title: str | None = None) -> Figure:
     """One panel per engine: the fragility curve P(overturn | IM) [%] of the engine (its colour)
-    over the analytic model's (black), each with its bootstrap band (shaded) and the measured
-    overturning fraction of each scale step (markers: circles analytic, squares the engine)."""
+    over the analytic model's (black; on its whole ladder when ``analysis`` has
+    ``reference_full``), each with its bootstrap band (shaded) and the measured overturning
+    fraction of each scale step (markers: open circles analytic, squares the engine)."""
     ref = analysis["reference"]
     name, unit = analysis["intensity"]["name"], analysis["intensity"]["unit"]
     grid = np.asarray(analysis["grid"], float)
-    backs = analysis["backends"]
+    backs = dict(analysis["backends"])
+    full = analysis.get("reference_full")   # the analytic model on its whole ladder
+    if full is not None:
+        backs[ref] = full
+        grid = np.geomspace(min(grid.min(), min(full["grid"])),
+                            max(grid.max(), max(full["grid"])), 80)
     engines = [b for b in F._order(list(backs)) if b != ref] or [ref]
     ncol = min(3, len(engines))
     nrow = math.ceil(len(engines) / ncol)
@@ -66,7 +72,8 @@ def plot_fragility(analysis: Mapping[str, Any], runs: pd.DataFrame, *,
             v = backs[b]
             band = v.get("band") or {}
             if band.get("low") is not None:
-                ax.fill_between(grid, 100 * np.asarray(band["low"], float),
+                bx = np.asarray(v.get("grid", analysis["grid"]), float)
+                ax.fill_between(bx, 100 * np.asarray(band["low"], float),
                                 100 * np.asarray(band["high"], float), color=colour,
                                 alpha=0.15, lw=0)
             ax.plot(grid, 100 * _curve(grid, v["median"], v["dispersion"]), color=colour,
@@ -96,18 +103,23 @@ def plot_fragility(analysis: Mapping[str, Any], runs: pd.DataFrame, *,
 def plot_fig9(frames: Mapping[str, pd.DataFrame], *, scale: float = 1.0,
               title: str | None = None) -> Figure:
     """The paper's Fig. 9 from fragility runs: the peak rotation max |phi| / alpha [-] per record
-    and direction at one ``scale`` (the nearest step of each frame's ladder), one panel per
+    and direction at one ``scale`` (the nearest step, in ratio, that every backend ran, on the
+    records every backend ran), one panel per
     frame (``frames``: label -> runs), every backend beside the analytic model
     (:func:`rockbench.report.figures.plot_record_peaks`)."""
     parts = []
     for label, runs in frames.items():
         if not len(runs):
             continue
-        steps = np.unique(runs["scale"].to_numpy(float))
-        s = steps[np.argmin(np.abs(steps - scale))]
+        # the steps every backend ran (the engines may run a part of the ladder)
+        per = [set(np.round(g["scale"], 9)) for _, g in runs.groupby("backend")]
+        steps = np.array(sorted(set.intersection(*per) or set(np.round(runs["scale"], 9))))
+        s = steps[np.argmin(np.abs(np.log(steps / scale)))]
         g = runs[np.isclose(runs["scale"], s)]
+        g = g[g["record"].isin(set.intersection(*[set(x["record"]) for _, x in
+                                                 g.groupby("backend")]))]
         parts.append(pd.DataFrame({
-            "record": g["record"], "frame": f"{label} (scale {s:g})",
+            "record": g["record"], "frame": f"{label} (scale {s:.3g})",
             "polarity": g["polarity"].astype(int), "backend": g["backend"],
             "max_abs_phi_over_alpha": g["peak"].astype(float),
             "overturned": g["overturned"].astype(bool), "status": g["status"]}))
@@ -137,18 +149,18 @@ def plot_peak_stripes(runs: pd.DataFrame, *, title: str | None = None) -> Figure
                     label=b if i == 0 else None)
             top = max(top, float(sv.max()) if sv.size else 0.0)
             if len(g):
-                ax.annotate(f"{100 * g['overturned'].astype(bool).mean():.0f} %", (x, 1.0),
-                            xycoords=("data", "axes fraction"), ha="center", va="bottom",
+                ax.annotate(f"{100 * g['overturned'].astype(bool).mean():.0f} %", (x, 0.98),
+                            xycoords=("data", "axes fraction"), ha="center", va="top",
                             fontsize=_FONT - 1, rotation=90, color=F.engine_color(b))
-    ax.set_xticks(range(len(steps)), [f"{s:g}" for s in steps], fontsize=_FONT - 1)
+    ax.set_xticks(range(len(steps)), [f"{s:.3g}" for s in steps], fontsize=_FONT - 1)
     ax.set_xlabel("scale factor of the records [-]", fontsize=_FONT)
     ax.set_ylabel("max |phi| / alpha of survivors [-]", fontsize=_FONT)
     ax.tick_params(labelsize=_FONT - 1)
-    ax.set_ylim(0, max(top * 1.1, 0.1))
+    ax.set_ylim(0, max(top * 1.45, 0.1))
     ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize=_FONT - 1, loc="upper left", ncol=min(len(backs), 6))
+    ax.legend(fontsize=_FONT - 1, loc="center left", ncol=1)
     if title:
-        ax.set_title(title + " (above: % overturned)", fontsize=_FONT + 1, pad=40)
+        ax.set_title(title + " (at the top: % of the runs overturned)", fontsize=_FONT + 1)
     return fig
 
 
