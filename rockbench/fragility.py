@@ -591,7 +591,7 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
                   store: str | os.PathLike | None = None, executor: str | None = None,
                   workers: int | None = None, scheduler: str | None = None,
                   progress: bool = True, n_boot: int = N_BOOT, seed: int = 0,
-                  keyed_by_code: bool = True) -> Fragility:
+                  keyed_by_code: bool = True, retry_errors: bool = False) -> Fragility:
     """Run and analyse the fragility of ``scene`` (a built-in name or a .toml path) over
     ``records`` (:func:`resolve_records`) at the ladder ``scales`` (:func:`parse_scales`), both
     polarities, for the analytic model and ``engines`` (default: every available backend).
@@ -601,7 +601,8 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     fits compare the runs both have). ``store``: a folder; rows are kept under
     ``store/<code fingerprint>/`` (:func:`rockbench.sweep.store.code_fingerprint`: results of
     other code are never mixed in; ``keyed_by_code=False`` keeps them in ``store`` itself, keyed
-    by the case only) and a rerun runs only the missing cases. ``executor``: "process" (default; ``workers`` processes),
+    by the case only) and a rerun runs only the missing cases (and, with ``retry_errors``, those
+    stored with status "error"). ``executor``: "process" (default; ``workers`` processes),
     "serial", or "dask" (implied by ``scheduler``, a running scheduler's address).
     """
     from .runner import REFERENCE, resolve_engines
@@ -628,7 +629,7 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
         directory = S.store_dir(store)
         directory = directory / S.code_fingerprint() if keyed_by_code else directory
     rows = run_cases(cases, store=directory, executor=executor, workers=workers,
-                     dask_address=scheduler, progress=progress)
+                     dask_address=scheduler, progress=progress, retry_errors=retry_errors)
     runs = _runs_frame(rows, ims, measure)
     # the analysis compares the cells both ran: the analytic runs of the engines' cells
     eng = runs["backend"].to_numpy() != REFERENCE
