@@ -8,7 +8,8 @@ taller column), each run from rest for the pulse window (6 T_g) plus 10 s.
 * :func:`map_cells` - the grid (inclusive ranges, ``grid=(nA, nW)``, the pulses selected);
 * :func:`run_map` - run every cell with one backend: the analytic model through its compiled
   path (:mod:`rockbench.analytic.compiled`, ``method="compiled"``, the default for maps) or the
-  ``solve_ivp`` reference (``method="solve_ivp"``); engines through :func:`rockbench.sweep.run_cases`
+  ``solve_ivp`` reference (``method="solve_ivp"``); engines through
+  :func:`rockbench.sweep.run_cases`
   (MuJoCo batched in ``mujoco.rollout``), on a local process pool or a Dask cluster. With a
   ``store`` (a Parquet dataset: a folder ``NAME.parquet`` of parts plus ``_inputs.json``) every
   finished chunk is written at once; a rerun skips the stored cells, and a store written for
@@ -19,7 +20,6 @@ taller column), each run from rest for the pulse window (6 T_g) plus 10 s.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from pathlib import Path
@@ -29,6 +29,10 @@ import numpy as np
 import pandas as pd
 
 from .errors import ParameterError, RockbenchError
+from .sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
+                              error_rows, load_map, map_rows, open_map_store, part_files,
+                              read_inputs, simulated_rows, store_error, store_inputs, tidy_map,
+                              write_part)
 
 __all__ = ["MAP_COLUMNS", "PULSES", "map_cells", "run_map", "load_map", "reuse_map",
            "map_agreement", "boundary", "mark_near_boundary", "NEAR_BOUNDARY_MARGIN"]
@@ -38,24 +42,6 @@ PULSES: dict[str, tuple[str, int]] = {"symmetric+": ("symmetric", 1),
                                       "symmetric-": ("symmetric", -1),
                                       "antisymmetric+": ("antisymmetric", 1),
                                       "antisymmetric-": ("antisymmetric", -1)}
-
-#: Columns of a map, with unit and meaning.
-MAP_COLUMNS: dict[str, str] = {
-    "amplitude": "-, A = a_g / (g tan alpha), alpha of the taller column",
-    "frequency": "-, W = omega_g / p, p of the taller column",
-    "pulse": "-, symmetric | antisymmetric Ricker pulse (paper Eqs. 29, 30)",
-    "sign": "-, +1 the pulse as printed, -1 mirrored",
-    "overturned": "-, |phi| reached the fall angle (engines: or came to rest beyond the critical angle)",
-    "exceeded_critical": "-, |phi| exceeded the critical angle of its potential",
-    "max_abs_phi_over_alpha": "-, max |phi| / alpha",
-    "n_impacts": "-, impacts of the run",
-    "fractured": "-, tendons fractured",
-    "status": "-, ok | diverged | invalid | error",
-    "wall_s": "s, wall time of the integration or stepping (batched: the cell's share)",
-}
-
-_KEY = ("pulse", "sign", "amplitude", "frequency")
-
 
 def _range(text_or_pair: Any, name: str) -> tuple[float, float]:
     if isinstance(text_or_pair, str):
@@ -121,196 +107,6 @@ def _axes(grid: Any, amplitude: Any, frequency: Any) -> tuple[np.ndarray, np.nda
     As = np.linspace(a0, a1, na) if na > 1 else np.array([a0])
     Ws = np.linspace(w0, w1, nw) if nw > 1 else np.array([w0])
     return np.round(As, 12), np.round(Ws, 12)
-
-
-# ------------------------------------------------------------------------------------------
-# The store: a Parquet dataset folder with the inputs it was written for
-# ------------------------------------------------------------------------------------------
-#: A writer merges the store's part files into one when it holds more than this many (and at
-#: the end of every run), so that a 100 x 100 x 4 map is not 40 000 files.
-COMPACT_EVERY = 64
-
-
-def _inputs(scene, scene_ref: str, engine: str, settings: dict, method: str,
-            tail: float | None, keyed_by_code: bool = True) -> dict[str, Any]:
-    """What a store was written for. ``keyed_by_code``: include rockbench's code fingerprint
-    (a store written by other code is refused); without it the store is keyed by the inputs
-    and the engine's version only, and its reuse must be verified by re-running sample cells
-    (:func:`reuse_map`)."""
-    from .engines import engine_info
-    from .sweep.store import code_fingerprint
-
-    out = {"scene": scene.to_dict(), "scene_ref": scene_ref, "engine": engine,
-           "engine_version": next((str(r.get("version", r.get("reason")))
-                                   for r in engine_info([engine])), ""),
-           "settings": {k: settings[k] for k in sorted(settings)}, "method": method,
-           "duration": f"pulse window (6 T_g) + {10.0 if tail is None else tail:g} s"}
-    if keyed_by_code:
-        out["code"] = code_fingerprint()
-    return out
-
-
-def _oserror(path: Path, e: OSError, doing: str) -> RockbenchError:
-    return RockbenchError(f"cannot {doing} the map store {path}: {e.strerror or e}; give a "
-                          f"--store in a folder you can write (or make this one writable)")
-
-
-def _read_inputs(path: Path) -> dict[str, Any] | str:
-    """The store's ``_inputs.json`` as a dict, or why it cannot be read (a string)."""
-    try:
-        old = json.loads((path / "_inputs.json").read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as e:
-        return f"{type(e).__name__}: {' '.join(str(e).split())[:120]}"
-    if not isinstance(old, dict):
-        return f"holds a {type(old).__name__}, not a table of inputs"
-    return old
-
-
-def _parts(path: Path) -> list[Path]:
-    """The store's part files, oldest first (a later row of a cell wins)."""
-    def mtime(p: Path) -> float:
-        try:
-            return p.stat().st_mtime
-        except OSError:
-            return math.inf
-    return sorted(path.glob("part-*.parquet"), key=lambda p: (mtime(p), p.name))
-
-
-def _open_store(path: Path, inputs: dict[str, Any]) -> pd.DataFrame:
-    """Rows already in the store at ``path`` (``_inputs.json`` written if missing); refuse a
-    store written for other inputs (scene, engine, settings, method or code) or one whose
-    ``_inputs.json`` is unreadable while it holds cells. The caller holds the writer lock."""
-    meta = path / "_inputs.json"
-    if meta.exists():
-        old = _read_inputs(path)
-        if isinstance(old, str):
-            if _parts(path):
-                raise RockbenchError(
-                    f"map store {path}: {meta.name} is unreadable ({old}), so the cells it "
-                    f"holds cannot be matched to these inputs; delete the folder {path} to "
-                    f"compute the map again, or give another --store")
-        else:
-            diff = [k for k in inputs if old.get(k) != inputs[k]]
-            if diff:
-                raise RockbenchError(
-                    f"map store {path} was written for other inputs ({', '.join(diff)} "
-                    f"differ: {', '.join(f'{k}={old.get(k)!r}' for k in diff if k != 'scene')}"
-                    f"); use another --store, or delete it to start again")
-            return _load_parts(path, quarantine=True)
-    elif _parts(path):
-        raise RockbenchError(
-            f"map store {path} holds part files but no {meta.name}, so its cells cannot be "
-            f"matched to these inputs; delete the folder {path} to compute the map again, or "
-            f"give another --store")
-    tmp = path / f".tmp-inputs-{os.getpid()}"
-    try:
-        tmp.write_text(json.dumps(inputs, indent=1, sort_keys=True), encoding="utf-8")
-        os.replace(tmp, meta)
-    except OSError as e:
-        tmp.unlink(missing_ok=True)
-        raise _oserror(path, e, "write") from None
-    return pd.DataFrame(columns=list(MAP_COLUMNS))
-
-
-def _write_chunk(path: Path, rows: pd.DataFrame) -> None:
-    """Write ``rows`` as a new part file (temporary name, then an atomic rename)."""
-    import uuid
-
-    name = f"part-{uuid.uuid4().hex[:16]}.parquet"
-    tmp = path / f".tmp-{name}"
-    try:
-        rows.to_parquet(tmp, index=False)
-        os.replace(tmp, path / name)
-    except OSError as e:
-        tmp.unlink(missing_ok=True)
-        raise _oserror(path, e, "write") from None
-
-
-def _compact(path: Path) -> None:
-    """Merge the part files of the store into one (written before the merged parts are
-    removed: an interruption between the two leaves duplicate rows, which :func:`load_map`
-    drops and the next writer's compaction removes). Only the writer (lock holder) calls it."""
-    parts = _parts(path)
-    if len(parts) < 2:
-        return
-    df = _load_parts(path, quarantine=True)
-    parts = [p for p in parts if p.exists()]
-    _write_chunk(path, _tidy(df))
-    for p in parts:
-        try:
-            p.unlink()
-        except FileNotFoundError:
-            pass
-        except OSError as e:
-            raise _oserror(path, e, "write") from None
-
-
-def _warn(message: str) -> None:
-    import warnings
-
-    warnings.warn(message, RuntimeWarning, stacklevel=3)
-
-
-def _read_part(p: Path) -> pd.DataFrame | str:
-    """A part file's rows, or why it is not a part of a map (a string)."""
-    try:
-        df = pd.read_parquet(p)
-    except ImportError:
-        raise
-    except Exception as e:  # ArrowInvalid, OSError, ...: truncated, corrupted, empty, foreign
-        return f"{type(e).__name__}: {' '.join(str(e).split())[:120]}"
-    missing = [c for c in MAP_COLUMNS if c not in df.columns]
-    if missing:
-        return f"not a map part: no column {', '.join(missing[:3])}"
-    try:
-        return _tidy(df)
-    except (TypeError, ValueError) as e:
-        return f"not a map part: {type(e).__name__}: {' '.join(str(e).split())[:120]}"
-
-
-def _load_parts(path: Path, *, quarantine: bool) -> pd.DataFrame:
-    """Every cell of the store at ``path`` (a cell written twice keeps its last row). A part
-    file that cannot be read as map rows is skipped with a warning; with ``quarantine`` (the
-    writer) it is moved to ``path/_quarantine/`` so that its cells are computed again."""
-    from .sweep.store import need_pyarrow
-
-    need_pyarrow()
-    frames = []
-    for p in _parts(path):
-        df = _read_part(p)
-        if isinstance(df, str):
-            if quarantine:
-                q = path / "_quarantine"
-                try:
-                    q.mkdir(exist_ok=True)
-                    os.replace(p, q / p.name)
-                except OSError as e:
-                    raise _oserror(path, e, "write") from None
-                _warn(f"map store {path}: part file {p.name} is unreadable ({df}); moved it "
-                      f"to {q} and its cells are computed again")
-            else:
-                _warn(f"map store {path}: skipped part file {p.name}, which is unreadable "
-                      f"({df}); run the map again with this store to compute its cells "
-                      f"(the bad file is then moved to _quarantine/)")
-            continue
-        if len(df):
-            frames.append(df)
-    if not frames:
-        return pd.DataFrame(columns=list(MAP_COLUMNS))
-    df = pd.concat(frames, ignore_index=True)
-    return df.drop_duplicates(list(_KEY), keep="last").reset_index(drop=True)
-
-
-def load_map(store: str | os.PathLike) -> pd.DataFrame:
-    """Every cell of a map store (columns :data:`MAP_COLUMNS`, one row per cell; a cell
-    written twice keeps its last row). The reader to use while a map is being written into
-    the store: ``pandas.read_parquet(folder)`` returns each cell once only when no writer is
-    running. An unreadable part file is skipped with a warning (a writer moves it to
-    ``_quarantine/`` and computes its cells again)."""
-    path = Path(store)
-    if not path.is_dir():
-        raise ParameterError("store", str(store), "an existing map store folder")
-    return _load_parts(path, quarantine=False)
 
 
 # ------------------------------------------------------------------------------------------
@@ -403,36 +199,6 @@ def _analytic_chunk(args: tuple) -> pd.DataFrame:
         df.loc[idx, "wall_s"] = (df.loc[idx, "wall_s"].to_numpy(float)
                                  + longer["wall_s"].to_numpy(float))
     return df
-def _tidy(df: pd.DataFrame) -> pd.DataFrame:
-    df = df.copy()
-    for c in ("amplitude", "frequency", "max_abs_phi_over_alpha", "wall_s"):
-        df[c] = df[c].astype("float64")
-    df["sign"] = df["sign"].astype("int64")
-    df["n_impacts"] = pd.array([None if pd.isna(v) else int(v) for v in df["n_impacts"]],
-                               dtype="Int64")
-    for c in ("overturned", "exceeded_critical", "fractured"):
-        df[c] = pd.array([None if v is None or v is pd.NA or (isinstance(v, float)
-                                                              and math.isnan(v)) else bool(v)
-                          for v in df[c]], dtype="boolean")
-    df["pulse"] = df["pulse"].astype(str)
-    df["status"] = df["status"].astype(str)
-    if "inferred" in df.columns:            # an adaptive map's cells that were not simulated
-        df["inferred"] = df["inferred"].astype("boolean").fillna(False).astype(bool)
-        return df[list(MAP_COLUMNS) + ["inferred"]]
-    return df[list(MAP_COLUMNS)]
-
-
-def _simulated(df: pd.DataFrame) -> pd.DataFrame:
-    """The rows of ``df`` that were simulated (an adaptive map's inferred rows left out)."""
-    if "inferred" not in df.columns:
-        return df
-    return df[~df["inferred"].astype("boolean").fillna(False).astype(bool)]
-
-
-def _cell_key(p: str, s: Any, a: Any, w: Any) -> tuple[str, int, float, float]:
-    return (p, int(s), round(float(a), 9), round(float(w), 9))
-
-
 def _check_backend(engine: str) -> None:
     """BackendUnavailable (one line: which backend, why) before any cell runs."""
     from .engines import get_backend
@@ -468,7 +234,8 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
     ``keyed_by_code``: False keys the store by its inputs and the engine version only (not by
     rockbench's code), for measured maps kept across code changes that are checked with
     :func:`reuse_map` before they are reused.
-    ``adaptive``: simulate only where the verdict can change (:func:`_adaptive`) and infer the
+    ``adaptive``: simulate only where the verdict can change
+    (:func:`rockbench.sweep.adaptive.adaptive_map`) and infer the
     other cells; the map (and the store) then has a column ``inferred``. ``attrs``:
     ``reused`` (cells taken from the store), ``cells_run`` (simulated now) and, adaptive,
     ``inferred``.
@@ -512,9 +279,12 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
         if not adaptive:
             return _run_cells(sc, scene_ref, ref_name, engine, settings, method, overrides,
                               cells, stored, *common)
-        return _adaptive(sc, lambda cs, st: _run_cells(
+        from .sweep.adaptive import adaptive_map
+
+        return adaptive_map(sc, lambda cs, st: _run_cells(
             sc, scene_ref, ref_name, engine, settings, method, overrides, cs, st, *common),
-            _axes(grid, amplitude, frequency), _pulses(pulses), stored)
+            _axes(grid, amplitude, frequency), [PULSES[p] for p in _pulses(pulses)],
+            stored)
 
     if path is None:
         return go(None)
@@ -525,17 +295,17 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise _oserror(path, e, "create") from None
+        raise store_error(path, e, "create") from None
     if not os.access(path, os.W_OK | os.X_OK):
         raise RockbenchError(f"cannot write the map store {path}: the folder is not writable; "
                              f"give a --store in a folder you can write")
     try:
         with writer_lock(path, "map store"):
-            inputs = _inputs(sc, ref_name, engine, settings, method or "", tail, keyed_by_code)
-            done = _open_store(path, inputs)
+            inputs = store_inputs(sc, ref_name, engine, settings, method or "", tail, keyed_by_code)
+            done = open_map_store(path, inputs)
             return go((path, done))
     except BaseException:
-        if created and not _parts(path):  # nothing computed: leave no empty store behind
+        if created and not part_files(path):  # nothing computed: leave no empty store behind
             import shutil
             shutil.rmtree(path, ignore_errors=True)
         raise
@@ -552,25 +322,25 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
 
     path, done = stored if stored is not None else (None, pd.DataFrame(
         columns=list(MAP_COLUMNS)))
-    done = _simulated(done)
-    have = {_cell_key(p, s, a, w) for p, s, a, w in zip(done["pulse"], done["sign"],
+    done = simulated_rows(done)
+    have = {cell_key(p, s, a, w) for p, s, a, w in zip(done["pulse"], done["sign"],
                                                          done["amplitude"], done["frequency"])}
-    todo = [c for c in cells if _cell_key(*c) not in have]
+    todo = [c for c in cells if cell_key(*c) not in have]
     reused = len(cells) - len(todo)
     frames = [done]
-    written = [len(_parts(path)) if path is not None else 0]
+    written = [len(part_files(path)) if path is not None else 0]
 
     def on_result(_key: str, df: pd.DataFrame) -> None:
         frames.append(df)
         if path is not None and len(df):
-            _write_chunk(path, _tidy(df))
+            write_part(path, tidy_map(df))
             written[0] += 1
             if written[0] > COMPACT_EVERY:
-                _compact(path)
+                compact_map_store(path)
                 written[0] = 1
 
     if path is not None and written[0] > 1:
-        _compact(path)                    # duplicates a killed compaction may have left
+        compact_map_store(path)                    # duplicates a killed compaction may have left
     if engine == "analytic":
         n_workers = (local_workers(workers) if executor == "process"
                      else workers or cpu_count())
@@ -578,166 +348,30 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
         items = [(f"chunk-{i}", (scene_ref, overrides or {}, todo[i:i + size], method, tail))
                  for i in range(0, len(todo), size)]
         execute(_analytic_chunk, items, on_result=on_result,
-                crashed=lambda item, why: _crashed(item[2], why),
+                crashed=lambda item, why: error_rows(item[2], why),
                 label=lambda item: f"{len(item[2])} cells",
                 executor=executor,
-                workers=n_workers if executor == "process" else workers, dask_address=scheduler, progress=progress and bool(items),
+                workers=n_workers if executor == "process" else workers,
+                dask_address=scheduler, progress=progress and bool(items),
                 desc=f"map {sc.name} analytic ({reused} reused)", unit="chunk")
     elif todo:
         _engine_rows(scene_ref, overrides, engine, settings, todo, tail,
                      on_rows=lambda rows: on_result("", rows), executor=executor,
                      workers=workers, dask_address=scheduler, progress=progress)
     if path is not None and written[0] > 1:
-        _compact(path)
+        compact_map_store(path)
     out = pd.concat([f for f in frames if len(f)], ignore_index=True) if any(
         len(f) for f in frames) else pd.DataFrame(columns=list(MAP_COLUMNS))
-    out = _tidy(out).drop_duplicates(list(_KEY), keep="last")
+    out = tidy_map(out).drop_duplicates(list(MAP_KEY), keep="last")
     out = out[list(MAP_COLUMNS)]
-    keep = {_cell_key(*c) for c in cells}
-    mask = [_cell_key(p, s, a, w) in keep for p, s, a, w in
+    keep = {cell_key(*c) for c in cells}
+    mask = [cell_key(p, s, a, w) in keep for p, s, a, w in
             zip(out["pulse"], out["sign"], out["amplitude"], out["frequency"])]
     out = out[mask].sort_values(["pulse", "sign", "frequency", "amplitude"],
                                 ascending=[True, False, True, True]).reset_index(drop=True)
     out.attrs.update(scene=sc.name, engine=engine, method=method or "", reused=reused,
                      cells_run=len(todo))
     return out
-
-
-#: Adaptive maps: the coarse pass simulates every COARSE_STRIDE-th point along A and W (and
-#: the last); a block of cells between simulated corners is halved until its corners agree.
-COARSE_STRIDE = 4
-#: Adaptive maps: a surviving corner whose max |phi| reaches this fraction of the critical
-#: angle makes its block "near" (refined), so that survival close to overturning is looked at.
-NEAR_CRITICAL = 0.7
-
-
-def _adaptive(sc, compute, axes: tuple[np.ndarray, np.ndarray], pulses: list[str],
-              stored: tuple[Path, pd.DataFrame] | None) -> pd.DataFrame:
-    """An adaptive map (issue 27): simulate the corners of the coarse blocks (every
-    :data:`COARSE_STRIDE`-th A and W, and the last), then, level by level, halve every block
-    whose corners do not all give one verdict with status ok, or where a surviving corner
-    rocked beyond :data:`NEAR_CRITICAL` of the critical angle, until blocks are one cell wide;
-    the cells of a block whose corners agree take their verdict (``inferred`` True, peak and
-    impacts unknown). ``compute(cells, stored)`` simulates cells (reusing stored ones) and
-    returns their rows. Measured on the analytic maps of the paper's frames: at 24 x 24 x 4
-    it simulates 16-31 % of the cells and reproduces 99.91-100 % of the full grid's verdicts;
-    at 100 x 100 x 4 (paper-asymmetric) 15 % and 99.95 % (``docs/maps.md``)."""
-    from .runner import info
-
-    As, Ws = axes
-    na, nw = len(As), len(Ws)
-    consts = info(sc)
-    # the smallest critical angle of any direction and device state [alpha] (a frame with
-    # intact tendons has none until they fracture)
-    crits = [abs(float(v)) for k, v in consts.items() if k.startswith("phi_cr_")
-             and v is not None and math.isfinite(float(v))]
-    crit = min(crits) / consts["alpha"] if crits else math.inf
-    path = stored[0] if stored is not None else None
-    known: dict[tuple, Any] = {}                 # (pulse, sign, i, j) -> row (namedtuple)
-    frames: list[pd.DataFrame] = []
-    reused = run = 0
-
-    def simulate(need: list[tuple[str, int, int, int]]) -> None:
-        nonlocal reused, run
-        need = [k for k in dict.fromkeys(need) if k not in known]
-        if not need:
-            return
-        cells = [(p, s, float(As[i]), float(Ws[j])) for p, s, i, j in need]
-        st = None if path is None else (path, pd.concat(
-            [stored[1]] + frames, ignore_index=True) if frames else stored[1])
-        df = compute(cells, st)
-        reused += int(df.attrs.get("reused", 0))
-        run += int(df.attrs.get("cells_run", 0))
-        frames.append(df)
-        by = {_cell_key(r.pulse, r.sign, r.amplitude, r.frequency): r for r in df.itertuples()}
-        for k, c in zip(need, cells):
-            known[k] = by[_cell_key(*c)]
-
-    if na < 2 or nw < 2:
-        simulate([(PULSES[p][0], PULSES[p][1], i, j) for p in pulses for i in range(na)
-                  for j in range(nw)])
-        blocks: list[tuple] = []
-    else:
-        ia = sorted(set(range(0, na, COARSE_STRIDE)) | {na - 1})
-        iw = sorted(set(range(0, nw, COARSE_STRIDE)) | {nw - 1})
-        blocks = [(PULSES[p][0], PULSES[p][1], a0, a1, w0, w1) for p in pulses
-                  for a0, a1 in zip(ia, ia[1:]) for w0, w1 in zip(iw, iw[1:])]
-    verdict: dict[tuple, bool] = {}
-    while blocks:
-        simulate([(p, s, a, w) for p, s, a0, a1, w0, w1 in blocks
-                  for a in (a0, a1) for w in (w0, w1)])
-        finer = []
-        for p, s, a0, a1, w0, w1 in blocks:
-            cs = [known[(p, s, a, w)] for a in (a0, a1) for w in (w0, w1)]
-            ok = all(c.status == "ok" for c in cs)
-            over = {bool(c.overturned) for c in cs if ok}
-            near = any(not bool(c.overturned) and c.max_abs_phi_over_alpha >= NEAR_CRITICAL
-                       * crit for c in cs if ok)
-            if ok and len(over) == 1 and not near:
-                v = over.pop()
-                for a in range(a0, a1 + 1):
-                    for w in range(w0, w1 + 1):
-                        verdict.setdefault((p, s, a, w), v)
-                continue
-            am = [a0, (a0 + a1) // 2, a1] if a1 - a0 > 1 else [a0, a1]
-            wm = [w0, (w0 + w1) // 2, w1] if w1 - w0 > 1 else [w0, w1]
-            if len(am) == 2 and len(wm) == 2:
-                continue                          # one cell wide: every cell is simulated
-            finer += [(p, s, x0, x1, y0, y1) for x0, x1 in zip(am, am[1:])
-                      for y0, y1 in zip(wm, wm[1:])]
-        blocks = finer
-    # a cell the store holds simulated (e.g. by a full run) is taken as it is, not inferred
-    old = _simulated(stored[1]) if stored is not None else pd.DataFrame()
-    if len(old):
-        index = {(p, s, round(float(As[a]), 9), round(float(Ws[w]), 9)): (p, s, a, w)
-                 for p in {PULSES[q][0] for q in pulses} for s in (1, -1)
-                 for a in range(na) for w in range(nw)}
-        have = {_cell_key(r.pulse, r.sign, r.amplitude, r.frequency) for r in
-                old.itertuples()}
-        take = [index[k] for k in have if k in index and index[k] in verdict
-                and index[k] not in known]
-        if take:
-            frames.append(_tidy(old[[_cell_key(r.pulse, r.sign, r.amplitude, r.frequency)
-                                     in {(p, s, round(float(As[a]), 9),
-                                          round(float(Ws[w]), 9)) for p, s, a, w in take}
-                                     for r in old.itertuples()]]))
-            reused += len(take)
-            known.update({k: None for k in take})
-    sim = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
-        columns=list(MAP_COLUMNS))
-    sim = _tidy(sim).drop_duplicates(list(_KEY), keep="last")[list(MAP_COLUMNS)]
-    sim = sim.assign(inferred=False)
-    guessed = [{"amplitude": float(As[a]), "frequency": float(Ws[w]), "pulse": p, "sign": s,
-                "overturned": v, "exceeded_critical": True if v else None,
-                "max_abs_phi_over_alpha": math.nan, "n_impacts": None, "fractured": None,
-                "status": "ok", "wall_s": 0.0, "inferred": True}
-               for (p, s, a, w), v in verdict.items() if (p, s, a, w) not in known]
-    out = sim
-    if guessed:
-        inf = _tidy(pd.DataFrame(guessed))
-        if path is not None:
-            _write_chunk(path, inf)
-            _compact(path)
-        out = pd.concat([sim, inf], ignore_index=True)
-    out = out.sort_values(["pulse", "sign", "frequency", "amplitude"],
-                          ascending=[True, False, True, True]).reset_index(drop=True)
-    out.attrs.update(scene=sc.name, engine=frames[0].attrs.get("engine", "") if frames else "",
-                     method=frames[0].attrs.get("method", "") if frames else "",
-                     reused=reused, cells_run=run, inferred=len(guessed))
-    return out
-
-
-def _map_rows(rows: Sequence[dict]) -> pd.DataFrame:
-    """Map rows (:data:`MAP_COLUMNS`) of sweep rows (:func:`rockbench.sweep.run_case`); a row
-    of a case that failed before it ran (status error) has no result fields: they are empty."""
-    return pd.DataFrame([{
-        "amplitude": r["motion.A"], "frequency": r["motion.W"], "pulse": r["motion.shape"],
-        "sign": r["motion.sign"], "overturned": r.get("overturned"),
-        "exceeded_critical": r.get("exceeded_critical"),
-        "max_abs_phi_over_alpha": r.get("max_abs_phi_over_alpha", math.nan),
-        "n_impacts": r.get("n_impacts"), "fractured": r.get("fractured"),
-        "status": r.get("status", "error"), "wall_s": r.get("wall_s", math.nan)}
-        for r in rows], columns=list(MAP_COLUMNS))
 
 
 def _engine_rows(scene_ref: Any, overrides: dict | None, engine: str, settings: dict,
@@ -755,9 +389,9 @@ def _engine_rows(scene_ref: Any, overrides: dict | None, engine: str, settings: 
               "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W}}
              for sh, sg, A, W in cells]
     rows = run_cases(cases, on_rows=(None if on_rows is None else
-                                     (lambda rs: on_rows(_map_rows(rs)))), keep="summary",
+                                     (lambda rs: on_rows(map_rows(rs)))), keep="summary",
                      **execution)
-    return _map_rows(rows.to_dict("records"))
+    return map_rows(rows.to_dict("records"))
 
 
 # ------------------------------------------------------------------------------------------
@@ -806,8 +440,8 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
     from .scene.scene import load_scene
 
     sc = load_scene(scene)
-    want = _inputs(sc, str(scene), engine, {}, "", tail, keyed_by_code=False)
-    old = _read_inputs(path)
+    want = store_inputs(sc, str(scene), engine, {}, "", tail, keyed_by_code=False)
+    old = read_inputs(path)
     if isinstance(old, str):
         return None, f"the measured map {path.name} has an unreadable {meta.name} ({old})"
     diff = [k for k in want if old.get(k) != want[k]]
@@ -821,17 +455,17 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
     missing = [c for c in cells if (c[0], c[1], round(c[2], 9), round(c[3], 9)) not in keys]
     if missing:
         return None, f"the measured map {path.name} lacks {len(missing)} of {len(cells)} cells"
-    df = _tidy(df)
+    df = tidy_map(df)
     keep = {(c[0], c[1], round(c[2], 9), round(c[3], 9)) for c in cells}
     df = df[[(p, int(s), round(a, 9), round(w, 9)) in keep for p, s, a, w in
              zip(df["pulse"], df["sign"], df["amplitude"], df["frequency"])]]
     df = df.sort_values(["pulse", "sign", "frequency", "amplitude"],
                         ascending=[True, False, True, True]).reset_index(drop=True)
     picks = _check_cells(df, check)
-    now = _tidy(_engine_rows(str(scene), None, engine, {}, [
+    now = tidy_map(_engine_rows(str(scene), None, engine, {}, [
         (r.pulse, int(r.sign), float(r.amplitude), float(r.frequency))
         for r in picks.itertuples()], tail, executor="serial", progress=False))
-    m = picks.merge(now, on=list(_KEY), suffixes=("", "_now"))
+    m = picks.merge(now, on=list(MAP_KEY), suffixes=("", "_now"))
     worst = 0.0
     for r in m.itertuples():
         cell = (f"{r.pulse} {'+' if r.sign > 0 else '-'} A={r.amplitude:.4g} "
@@ -850,14 +484,6 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
     return df, (f"measured earlier ({len(df)} cells, {want['engine_version']}), "
                 f"reproduced now at {len(m)} re-run cells (largest relative difference in "
                 f"max |phi|/alpha {worst:.1e})")
-
-
-def _crashed(cells, why: str) -> pd.DataFrame:
-    return pd.DataFrame([{"amplitude": A, "frequency": W, "pulse": sh, "sign": sg,
-                          "overturned": None, "exceeded_critical": None,
-                          "max_abs_phi_over_alpha": math.nan, "n_impacts": None,
-                          "fractured": None, "status": "error", "wall_s": math.nan}
-                         for sh, sg, A, W in cells], columns=list(MAP_COLUMNS))
 
 
 def _default_method() -> str:
@@ -940,9 +566,9 @@ def map_agreement(a: pd.DataFrame, b: pd.DataFrame) -> dict[str, Any]:
 
     RockbenchError when the maps have no cell in common (nothing to compare); ``n`` = 0 when
     they share cells but none ran ok in both (``fraction`` and ``kappa`` then NaN)."""
-    key = list(_KEY)
-    ka = [_cell_key(*k) for k in zip(a["pulse"], a["sign"], a["amplitude"], a["frequency"])]
-    kb = [_cell_key(*k) for k in zip(b["pulse"], b["sign"], b["amplitude"], b["frequency"])]
+    key = list(MAP_KEY)
+    ka = [cell_key(*k) for k in zip(a["pulse"], a["sign"], a["amplitude"], a["frequency"])]
+    kb = [cell_key(*k) for k in zip(b["pulse"], b["sign"], b["amplitude"], b["frequency"])]
     a = a.assign(_k=ka)
     b = b.assign(_k=kb)
     m = a.merge(b.drop(columns=key + [c for c in ("near_boundary",) if c in b.columns]),

@@ -4,7 +4,9 @@
 * :mod:`.cases` - what a case is (:func:`normalize_case`, :func:`case_id`), grids
   (:func:`pulse_grid`) and the case catalogue (``rockbench/scenarios/cases.toml``);
 * :mod:`.executors` - the one executor (serial | process pool | Dask);
-* :mod:`.store` - the one store (Parquet rows, comparison payloads, code fingerprint);
+* :mod:`.store` - the one store (Parquet rows, comparison payloads, code fingerprint, the
+  writer lock); :mod:`.map_store` - the map rows' schema and store folder (``docs/maps.md``);
+* :mod:`.adaptive` - adaptive maps (simulate where the verdict can change, infer the rest);
 * :mod:`.runs` - :func:`run_case` and :func:`run_cases`.
 
 :func:`overturn_map` (defined in :mod:`rockbench.compare`) pivots a sweep frame into an A x W
