@@ -4,15 +4,18 @@ point for overturning maps (:func:`run_pulse_grid`).
 
 Design (measured choices, see ``benchmarks/results/compiled_analytic.md``):
 
-* Kinematics and Eq. 17 terms are *evaluated*, not tabulated, in closed form from plain
-  parameter arrays extracted once per scene (:func:`scene_arrays`), specialised by mechanism
-  (:func:`rockbench.analytic.kernels._kinematics`): a block; a frame whose linkage is a
-  parallelogram (the symmetric frame) as the Housner block it exactly is (constant I, J = 0,
-  G and B combinations of cos phi and sin phi: one sin and one cos per evaluation); any other
-  frame by the exact loop closure of :mod:`rockbench.scene.mechanism` with the link directions
-  taken from the linkage's vectors (no atan2). phi'' agrees with ``Dynamics.acceleration`` to
-  1e-12 of the equation's largest term (``tests/analytic/test_compiled.py``), so there is no
-  interpolation error to budget for.
+* Eq. 17 is evaluated from plain parameter arrays extracted once per scene
+  (:func:`scene_arrays`), specialised by mechanism (:func:`rockbench.analytic.kernels._phidd`):
+  a block in closed form; a frame whose linkage is a parallelogram (the symmetric frame) as the
+  Housner block it exactly is (constant I, J = 0, G and B combinations of cos phi and sin phi:
+  one sin and one cos per evaluation); any other frame from tables of its terms I, J, G, B and
+  the devices' sums (:data:`TABLE_INTERVALS` piecewise polynomials of degree
+  :data:`TABLE_DEGREE` over s phi in [-TABLE_MARGIN, fall angle + TABLE_MARGIN], Chebyshev
+  interpolation of ``Dynamics.terms``), and beyond the table (near the fall angle) by the exact loop closure of
+  :mod:`rockbench.scene.mechanism` with the link directions taken from the linkage's vectors
+  (no atan2). Every form gives phi'' within 1e-12 of ``Dynamics.acceleration``'s largest term
+  (measured <= 2.2e-13, ``tests/analytic/test_compiled.py``): far below the integration
+  tolerance.
 * The integrator is the same explicit Runge-Kutta method of order 8 with a 7th-order error
   estimate and 7th-order dense output (Dormand-Prince 8(5,3), "DOP853") that the reference path
   uses through ``scipy.integrate.solve_ivp``, with the same step-size controller and the same
@@ -74,7 +77,7 @@ __all__ = ["NUMBA_AVAILABLE", "NUMBA_ERROR", "simulate_compiled", "run_pulse_gri
            "scene_arrays", "MAP_COLUMNS"]
 
 from .kernels import NUMBA_AVAILABLE, NUMBA_ERROR, numba  # noqa: F401
-from .kernels import (_A, _ANTI_EXT, _B, _BETA, _C, _D, _E3, _E5, _EV_NAMES, _M_ANTI, _M_NONE, _M_REC, _M_SYM, _NGEO, _NOUT, _NS, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _REASONS, _SYM_EXT, _XFAC)
+from .kernels import (_A, _ANTI_EXT, _B, _BETA, _C, _D, _E3, _E5, _EV_NAMES, _M_ANTI, _M_NONE, _M_REC, _M_SYM, _NGEO, _NOUT, _TAB0, _NS, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _REASONS, _SYM_EXT, _XFAC)
 from .kernel_run import (_grid_parallel, _grid_serial, _run)
 
 #: Columns of the frame returned by :func:`run_pulse_grid`, in order.
@@ -94,14 +97,17 @@ def _require_numba() -> None:
 def scene_arrays(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Plain parameter arrays of ``scene`` for the compiled kernel, computed once per scene.
 
-    Returns ``geo`` (2 x 40: one row per direction, index 0 for +1 and 1 for -1: the kind of
-    mechanism (0 block, 1 frame, 2 parallelogram frame), its geometry, masses, inertias, b, k, C,
-    cos and sin of the links' rest angles, a parallelogram's block constants) and ``sc`` (scalars: lambda, eta, fall, fracture and
-    critical angles, alpha, p, devices flag), all from :func:`reference_of`.
+    Returns ``geo`` (2 rows, one per direction, index 0 for +1 and 1 for -1: the kind of
+    mechanism (0 block, 1 frame, 2 parallelogram frame, 3 tabulated frame), its geometry,
+    masses, inertias, b, k, C, cos and sin of the links' rest angles, a parallelogram's block
+    constants, a tabulated frame's tables from column ``_TAB0``) and ``sc`` (scalars: lambda,
+    eta, fall, fracture and critical angles, alpha, p, devices flag), all from
+    :func:`reference_of`.
     """
     ref = reference_of(scene)
     st = scene.structure
-    geo = np.zeros((2, _NGEO))
+    tabulate = isinstance(st, Frame)
+    geo = np.zeros((2, _TAB0 + (6 * TABLE_INTERVALS * (TABLE_DEGREE + 1) if tabulate else 0)))
     for i, s in enumerate((1, -1)):
         dyn = ref.dyn[s]
         row = geo[i]
@@ -131,6 +137,8 @@ def scene_arrays(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
             for j, a in enumerate((mech._phiAB0, mech._phiBC0, mech._phiCD0)):
                 row[34 + 2 * j] = math.cos(a)
                 row[35 + 2 * j] = math.sin(a)
+            if not para:
+                _tabulate(row, dyn, s, ref.fall[s])
             if para:
                 # the block form (kernels._phidd): P = sum m r_x, Q = sum m r_y of the rest
                 # offsets (columns about their pivots, the beam's pivot B about A), constant I
@@ -157,6 +165,47 @@ def scene_arrays(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
 # ================================================================================================
 # Compiled kernel
 # ================================================================================================
+#: Tabulated terms of a frame that is not a parallelogram (kernels._tabulated): intervals over
+#: s phi in [-TABLE_MARGIN, TABLE_END x the fall angle (or the linkage's reach, if smaller)] and
+#: the polynomials' degree; beyond, where the terms steepen toward the linkage's toggle, the exact
+#: closure is evaluated. Measured: phi'' within 2e-13 of the closed form's largest term
+#: (tests/analytic/test_compiled.py).
+TABLE_INTERVALS = 48
+TABLE_DEGREE = 11
+TABLE_MARGIN = 0.02
+TABLE_END = 0.85
+
+
+def _tabulate(row: np.ndarray, dyn, s: int, fall: float) -> None:
+    """Fill ``row`` (kind 3) with piecewise polynomials of I, J, G, B, sum e de/dphi and sum
+    (dc/dphi)^2 of ``dyn`` over u = s phi: Chebyshev interpolation at each interval's
+    Chebyshev points, stored as power series in x in [-1, 1] (highest degree first). Beyond
+    the linkage's reach (or beyond the table) the kernel evaluates the exact closure."""
+    from numpy.polynomial import chebyshev as C
+
+    from ..scene.mechanism import geometric_limit
+    lo = -TABLE_MARGIN
+    hi = TABLE_END * min(fall, geometric_limit(dyn.mechanism))
+    n, d = TABLE_INTERVALS, TABLE_DEGREE
+    du = (hi - lo) / n
+    nodes = np.cos(np.pi * (np.arange(d + 1) + 0.5) / (d + 1))     # Chebyshev points
+    k, c = dyn._k, dyn._c
+    for i in range(n):
+        vals = np.zeros((6, d + 1))
+        for j, x in enumerate(nodes):
+            u = lo + (i + 0.5 * (x + 1.0)) * du
+            t = dyn.terms(s * u, True)
+            vals[:4, j] = (t.inertia, t.velocity, t.gravity, t.ground)
+            vals[4, j] = t.tendon / k if k > 0.0 else 0.0
+            vals[5, j] = t.damping / c if c > 0.0 else 0.0
+        base = _TAB0 + i * 6 * (d + 1)
+        for f in range(6):
+            cheb = C.chebfit(nodes, vals[f], d)
+            row[base + f * (d + 1): base + (f + 1) * (d + 1)] = C.cheb2poly(cheb)[::-1]
+    row[0] = 3.0
+    row[44], row[45], row[46], row[47], row[48], row[49] = s, lo, hi, du, n, d
+
+
 def _thresholds(sc: np.ndarray) -> tuple[float, float]:
     f = 1.0 + rules.UPLIFT_RTOL
     return sc[0] * G * f, sc[1] * G * f
@@ -230,8 +279,8 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
     Same signature, arguments and :class:`rockbench.result.Result` schema as
     :func:`rockbench.analytic.solver.simulate` (see its docstring; ``settings`` is an
     ``AnalyticSettings``: rtol, atol, output_dt, rest_ratio and history are honoured; method must
-    be "DOP853" (the scheme compiled here), "compiled" or "auto"). ``motion`` may be a RickerPulse, a
-    Record or None (free rocking). ``cost.wall_s`` counts the compiled integration only;
+    be "DOP853" (the scheme compiled here), "compiled" or "auto"). ``motion`` may be a
+    RickerPulse, a Record or None (free rocking). ``cost.wall_s`` counts the compiled integration only;
     ``cost.steps`` counts accepted steps and ``cost.rhs_calls`` evaluations of phi''.
     """
     _require_numba()

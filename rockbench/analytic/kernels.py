@@ -50,7 +50,8 @@ _REASONS = {1: "integrator step size fell below 10 ulp (solver could not advance
             3: "event buffer full",
             4: "event loop exceeded the maximum number of iterations"}
 # layout of the per-direction geometry rows (see scene_arrays)
-_NGEO = 44
+_NGEO = 44       # fixed part of a geometry row; tables (kind 3) follow from _TAB0
+_TAB0 = 50
 # layout of the summary vector returned by the kernel
 (_O_STATUS, _O_T, _O_MAXABS, _O_OVER, _O_TOVER, _O_EXC, _O_UPL, _O_TUPL, _O_NIMP, _O_FRAC,
  _O_TFRAC, _O_STEPS, _O_NFEV, _O_NEV, _O_PHI, _O_PHID, _O_MODE, _O_INTACT, _O_ADV) = range(19)
@@ -200,6 +201,43 @@ def _devices(kin, b):
 
 
 @njit(cache=True, inline="always")
+def _tabulated(u, pd, ag, g, dev):
+    """phi'' from the tabulated terms of a frame (``g[0] == 3``, compiled.scene_arrays):
+    u = s phi in [g[45], g[46]] split into g[48] equal intervals of width g[47], each with
+    polynomials of degree g[49] in the interval's local coordinate x in [-1, 1] for I, J, G, B,
+    sum e de/dphi and sum (dc/dphi)^2 (coefficients from g[_TAB0], highest degree first)."""
+    du = g[47]
+    n = int(g[48])
+    d = int(g[49])
+    i = int((u - g[45]) / du)
+    if i >= n:
+        i = n - 1
+    x = 2.0 * (u - g[45] - i * du) / du - 1.0
+    nf = 6 if dev else 4
+    base = _TAB0 + i * 6 * (d + 1)
+    vI = g[base]
+    vJ = g[base + (d + 1)]
+    vG = g[base + 2 * (d + 1)]
+    vB = g[base + 3 * (d + 1)]
+    for j in range(1, d + 1):
+        vI = vI * x + g[base + j]
+        vJ = vJ * x + g[base + (d + 1) + j]
+        vG = vG * x + g[base + 2 * (d + 1) + j]
+        vB = vB * x + g[base + 3 * (d + 1) + j]
+    K = 0.0
+    D = 0.0
+    if nf == 6:
+        vK = g[base + 4 * (d + 1)]
+        vD = g[base + 5 * (d + 1)]
+        for j in range(1, d + 1):
+            vK = vK * x + g[base + 4 * (d + 1) + j]
+            vD = vD * x + g[base + 5 * (d + 1) + j]
+        K = g[27] * vK
+        D = g[28] * vD
+    return (vB * ag - vJ * pd * pd - vG * 9.81 - K - D * pd) / vI
+
+
+@njit(cache=True, inline="always")
 def _phidd(phi, pd, ag, g, intact, kin):
     """phi'' [rad/s^2] of Eq. 17 (Dynamics.acceleration).
 
@@ -227,6 +265,10 @@ def _phidd(phi, pd, ag, g, intact, kin):
             K = g[27] * (el * dl + er * dr)
             D = g[28] * (cl * cl + cr * cr)
         return ((Q * c + P * s) * ag - (P * c - Q * s) * 9.81 - K - D * pd) / g[42]
+    if g[0] == 3.0:
+        u = g[44] * phi
+        if g[45] <= u <= g[46]:
+            return _tabulated(u, pd, ag, g, dev)
     nb = _kinematics(phi, g, kin, dev)
     if nb < 0:
         return np.nan
