@@ -94,7 +94,9 @@ class DrakeSettings(EngineSettings):
     dissipation : Hunt-Crossley dissipation of a pair [s/m], in [0, 1e3] ("similar", "lagged",
         "cenic" and hydroelastic contact); 50 s/m makes an impact effectively inelastic.
     relaxation_time : SAP's dissipation time scale [s], in [0, 1] ("sap" only).
-    corner_radius : radius of the corner spheres [m], in [1e-5, 1e-2].
+    corner_radius : radius of the corner spheres [m], in [1e-6, 1e-2] (default 1e-5: a rounded
+        corner lifts by r (1 - cos phi) as it rolls, which hides the contact's penetration from
+        the shared contact probe when r is 1 mm).
     hydroelastic_modulus : of the compliant boxes [Pa], in [1e6, 1e14] ("hydroelastic" only).
     damper : how the shared damper forces reach the bodies (one of
         :data:`~rockbench.engines.devices.DAMPER_MODELS`; default "distributed").
@@ -106,7 +108,7 @@ class DrakeSettings(EngineSettings):
     stiffness: float = 1e12
     dissipation: float = 50.0
     relaxation_time: float = 1e-3
-    corner_radius: float = 1e-3
+    corner_radius: float = 1e-5
     hydroelastic_modulus: float = 1e11
     damper: str = "distributed"
 
@@ -118,7 +120,7 @@ class DrakeSettings(EngineSettings):
         check_range("stiffness", self.stiffness, 1e5, 1e13)
         check_range("dissipation", self.dissipation, 0.0, 1e3)
         check_range("relaxation_time", self.relaxation_time, 0.0, 1.0)
-        check_range("corner_radius", self.corner_radius, 1e-5, 1e-2)
+        check_range("corner_radius", self.corner_radius, 1e-6, 1e-2)
         check_range("hydroelastic_modulus", self.hydroelastic_modulus, 1e6, 1e14)
         check_choice("damper", self.damper, DAMPER_MODELS)
         for name in ("accuracy", "stiffness", "dissipation", "relaxation_time", "corner_radius",

@@ -199,6 +199,17 @@ def test_cenic_counts_its_internal_steps_and_tightens_with_accuracy(block):
     assert steps[1e-7] > 2 * steps[1e-2]
 
 
+def test_the_contact_penetration_is_seen_by_the_shared_probe(block):
+    """The corner spheres' rolling must not hide the contact's penetration from the shared
+    contact probe: with 1 mm spheres a rocking corner lifted by r (1 - cos phi), more than the
+    0.1 um it sank, and a run forced to diverge (max_penetration 1e-12 m, check_backend's
+    check) said ok; with the default 10 um it is reported."""
+    r = rb.run(block, None, engine="drake", phi0=0.5 * block.alpha, duration=0.5,
+               max_penetration=1e-12)
+    assert r.status == "diverged" and "penetration" in r.summary.reason
+    assert 1e-8 < r.summary.max_penetration < 1e-6     # m g / k = 1.2e-7 m on one corner
+
+
 # --- accuracy (short runs; the cross-engine suite holds the defaults to every bar) ---------------
 def _eta_error(r, scene):
     from rockbench.analytic.reference import reference_of
@@ -243,6 +254,12 @@ def test_fracture_at_the_analytic_time_then_no_device_force():
 
 
 # --- slow: every solver on the cross-engine cases ----------------------------------------------
+@pytest.mark.slow
+def test_check_backend_passes():
+    from rockbench.testing import check_backend
+    assert check_backend("drake").ok
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("solver", ["similar", "sap", "lagged"])
 def test_discrete_solvers_on_the_surviving_pulses(solver):
