@@ -114,6 +114,25 @@ def _save(fig, path: Path) -> None:
         tmp.unlink(missing_ok=True)
 
 
+def _with_near_boundary(df, store: Path):
+    """``df`` (the first map of --compare) with its cells near the boundary marked
+    (:func:`rockbench.maps.mark_near_boundary`) when its store says it is an analytic map
+    (its scene and run length are in ``_inputs.json``); otherwise ``df`` unchanged."""
+    import re
+
+    from .maps import mark_near_boundary
+    from .scene.scene import Scene
+    from .sweep.map_store import read_inputs
+
+    inputs = read_inputs(store)
+    if not isinstance(inputs, dict) or inputs.get("engine") != "analytic" or not len(df):
+        return df
+    m = re.search(r"\+ ([0-9.eE+-]+) s$", str(inputs.get("duration", "")))
+    tail = float(m.group(1)) if m else None
+    scene = Scene.from_dict(inputs["scene"], source=f"{store}/_inputs.json")
+    return mark_near_boundary(df, scene, tail=None if tail == 10.0 else tail)
+
+
 def cmd_map(args: argparse.Namespace) -> int:
     with _one_line_warnings():
         return _cmd_map(args)
@@ -121,11 +140,12 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 def _cmd_map(args: argparse.Namespace) -> int:
     from .errors import RockbenchError
-    from .maps import describe_shift, load_map, map_agreement, run_map
+    from .maps import NEAR_BOUNDARY_MARGIN, describe_shift, load_map, map_agreement, run_map
 
     figure = _figure_path(args.figure)
     if args.compare:
         a, b = (load_map(x) for x in args.compare)
+        a = _with_near_boundary(a, Path(args.compare[0]))
         ag = map_agreement(a, b)
         if ag["n"] == 0:
             raise RockbenchError(f"{args.compare[0]} and {args.compare[1]} share "
@@ -147,6 +167,11 @@ def _cmd_map(args: argparse.Namespace) -> int:
             return 0
         print(f"{args.compare[1]} against {args.compare[0]}: {ag['n']} cells, "
               f"{100 * ag['fraction']:.2f} % agree, Cohen's kappa {ag['kappa']:.3f}")
+        if "near_boundary" in ag:
+            print(f"{ag['near_boundary']} cells lie within {100 * NEAR_BOUNDARY_MARGIN:g} % in A "
+                  f"of the first map's boundary (near the boundary): "
+                  f"{ag['disagree_near_boundary']} differing verdicts there, "
+                  f"{ag['disagree_away']} away from it")
         print(out["in_words"])
         if figure is not None:
             print(f"figure: {figure}")

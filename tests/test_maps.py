@@ -230,7 +230,13 @@ def test_map_figure_and_overlay(tmp_path, capsys):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     over = tmp_path / "overlay.svg"
     assert main(["map", "--compare", str(store), str(store), "--figure", str(over)]) == 0
-    assert "figure:" in capsys.readouterr().out and b"<svg" in over.read_bytes()[:400]
+    text = capsys.readouterr().out
+    assert "figure:" in text and b"<svg" in over.read_bytes()[:400]
+    assert "near the boundary" in text            # an analytic first map: cells near it marked
+    assert main(["map", "--compare", str(store), str(store), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["disagree_near_boundary"] == out["disagree_away"] == 0
+    assert 0 <= out["near_boundary"] <= out["n"] == 12
     assert main(["map", "paper-asymmetric", *cells, "--store", str(store), "--figure",
                  str(tmp_path / "m.txt")]) == 2
     assert "--figure" in capsys.readouterr().err
