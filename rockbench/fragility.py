@@ -57,20 +57,16 @@ RUN_COLUMNS: dict[str, str] = {
     "backend": "-, analytic or an engine",
     "record": "-, record name (file stem)",
     "polarity": "-, +1 as recorded, -1 reversed",
-    "scale": "-, scale factor of the ladder (> 0; the run's ground motion is polarity x scale "
-             "x the record)",
+    "scale": "-, scale factor of the ladder (the run's motion: polarity x scale x record)",
     "im": "IM unit, intensity measure of the scaled record (scale x IM of the record)",
-    "peak": "-, max |phi| / alpha, alpha of the taller column (overturned runs: the angle "
-            "where the run stopped)",
+    "peak": "-, max |phi| / alpha, alpha of the taller column (overturned: where it stopped)",
     "overturned": "-, the frame overturned",
     "status": "-, ok | diverged | invalid | error",
     "cpu_s": "s, CPU time of the integration or stepping",
 }
 
-#: Significance level of the tests and coverage of the intervals (two-sided 95 %).
-ALPHA = 0.05
-#: Default number of bootstrap resamples of the records.
-N_BOOT = 1000
+#: Significance level of the tests (intervals: two-sided 1 - ALPHA); bootstrap resamples.
+ALPHA, N_BOOT = 0.05, 1000
 #: Bounds of the fit: dispersion beta in [BETA_MIN, BETA_MAX]; a fit at a bound is flagged.
 BETA_MIN, BETA_MAX = 1e-3, 5.0
 #: Fewest records for a verdict (n records give at most C(2n - 1, n) distinct bootstrap
@@ -385,17 +381,19 @@ def bootstrap(runs: pd.DataFrame, *, n_boot: int = N_BOOT, seed: int = 0,
 
 
 def peak_test(peaks_a: Sequence[float], overturned_a: Sequence[bool],
-              peaks_b: Sequence[float], overturned_b: Sequence[bool]) -> dict[str, Any]:
+              peaks_b: Sequence[float], overturned_b: Sequence[bool], *,
+              floor: float = 0.0) -> dict[str, Any]:
     """Two-sample Kolmogorov-Smirnov test (``scipy.stats.ks_2samp``, two-sided, exact for small
     samples) of two peak samples max |phi| / alpha [-]. Overturned runs are right-censored: their
-    peak is set above every finite peak (+inf), so they rank above every survivor and tie with
-    each other (the test uses ranks only). Returns ``statistic`` (the largest distance of the two
+    peak is set to +inf, above every survivor, tied with each other. Peaks below ``floor``
+    [-] count as 0 (not uplifted; :func:`analyse` passes the engines' ``uplift_tol``, 1e-3:
+    contacts are never perfectly rigid). Returns ``statistic`` (the largest distance of the two
     empirical distribution functions, [-]), ``p_value``, ``n_a``, ``n_b``; NaN when a sample is
     empty."""
     from scipy.stats import ks_2samp
-
     def censor(p, o):
         p = np.asarray(p, dtype=float).copy()
+        p[p < floor] = 0.0
         p[np.asarray(o, dtype=bool)] = np.inf
         return p
 
@@ -426,8 +424,7 @@ def stripes(runs: pd.DataFrame) -> pd.DataFrame:
 def _holm(p: Sequence[float], alpha: float = ALPHA) -> np.ndarray:
     """Holm's step-down rejections of the hypotheses with p-values ``p`` (NaN: not tested)."""
     p = np.asarray(p, dtype=float)
-    reject = np.zeros(p.size, dtype=bool)
-    idx = [i for i in np.argsort(p) if np.isfinite(p[i])]
+    reject, idx = np.zeros(p.size, dtype=bool), [i for i in np.argsort(p) if np.isfinite(p[i])]
     m = len(idx)
     for k, i in enumerate(idx):
         if p[i] > alpha / (m - k):
@@ -438,7 +435,7 @@ def _holm(p: Sequence[float], alpha: float = ALPHA) -> np.ndarray:
 
 # ------------------------------------------------------------------------- the analysis
 def _fmt(x: float) -> str:
-    return "nan" if not math.isfinite(x) else f"{x:.3g}"
+    return f"{x:.3g}" if math.isfinite(x) else "nan"
 
 
 def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], unit: str,
@@ -485,7 +482,8 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
     lognormal fit (:func:`fit_lognormal`) with ``median_ci``, ``dispersion_ci`` and the curve's
     band (:func:`bootstrap`, ``n_boot`` resamples, ``seed``), ``note``, runs and counts; for an
     engine, against ``reference``: ``tests`` (per scale step, :func:`peak_test`: ``statistic``,
-    ``p_value``, ``rejected`` by Holm's procedure over the steps at level :data:`ALPHA`),
+    ``p_value``, ``rejected`` by Holm's procedure over the steps at level :data:`ALPHA`; peaks
+    below the engines' ``uplift_tol`` count as 0),
     ``statistic`` and ``p_value`` of the step with the smallest p-value, ``median_difference``
     [IM unit] with ``median_difference_ci``, ``indistinguishable`` and ``verdict`` (a sentence).
 
@@ -508,6 +506,8 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
                            "reference": reference, "n_boot": n_boot, "seed": seed,
                            "level": 1 - ALPHA, "grid": grid.tolist(), "backends": {}}
     ref = ok[ok["backend"] == reference]
+    from .engines.base import EngineSettings      # below uplift_tol: not uplifted
+    floor = EngineSettings.uplift_tol
     for b in backends:
         g = runs[runs["backend"] == b]
         f = fits.get(b, {"median": math.nan, "dispersion": math.nan, "n": 0,
@@ -526,8 +526,8 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
             mine = ok[ok["backend"] == b]
             for s, rg in ref.groupby("scale", sort=True):
                 eg = mine[mine["scale"] == s]
-                t = peak_test(rg["peak"], rg["overturned"].astype(bool),
-                              eg["peak"], eg["overturned"].astype(bool))
+                t = peak_test(rg["peak"], rg["overturned"].astype(bool), eg["peak"],
+                              eg["overturned"].astype(bool), floor=floor)
                 t.update(scale=float(s), im_median=float(rg["im"].median()))
                 tests.append(t)
             rej = _holm([t["p_value"] for t in tests])

@@ -287,3 +287,72 @@ def test_cli_bad_input_is_one_line(capsys):
     assert err.startswith("rockbench: error:") and "scales" in err and len(err.splitlines()) == 1
     assert main(["fragility", "paper-asymmetric", "--records", "no-such-ensemble"]) == 2
     assert "bundled" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# the report's section
+# ---------------------------------------------------------------------------------------------
+def test_section_html_and_table(tmp_path):
+    """The page block shows each engine's verdict and the figures (curves, peaks, Fig. 9); the
+    table has one row per backend with the fit and the test."""
+    from rockbench.campaign_fragility import section_table
+    from rockbench.report.fragility_figures import fragility_html, plot_fragility
+
+    caps = _quantile_capacities(10, 2.0, 0.4)
+    scales = np.linspace(0.5, 5.0, 6)
+    runs = pd.concat([_ensemble(caps, scales), _ensemble(caps / 2.0, scales, backend="pymunk")])
+    a = analyse(runs, n_boot=50)
+    section = {"what": "synthetic", "fig9": True,
+               "frames": [{"label": "free-standing", "scene": "x", "runs": runs,
+                           "analysis": a}]}
+    html = fragility_html(section, tmp_path)
+    assert "pymunk: distinguishable from the analytic model" in html
+    assert {p.name for p in tmp_path.iterdir()} == {"fragility_0.png", "fragility_peaks_0.png",
+                                                    "fragility_fig9.png"}
+    tab = section_table(section)
+    assert tab["backend"].tolist() == ["analytic", "pymunk"]
+    assert tab.loc[1, "median_difference"] < -0.3     # the weaker engine: an earlier median
+    fig = plot_fragility(a, runs)
+    assert fig.get_figwidth() <= 11.6
+    assert all(t.get_fontsize() >= 9 for ax in fig.axes for t in
+               ax.get_xticklabels() + ax.get_yticklabels() + [ax.xaxis.label, ax.title])
+
+
+@pytest.mark.slow
+def test_section_quick_end_to_end(tmp_path):
+    """The campaign's part at its quick size on the bundled records: both Fig. 9 frames run,
+    the analytic model on the whole ladder, the fast engines on part of it."""
+    from rockbench.campaign_fragility import fragility_section
+
+    sec = fragility_section({"free-standing": "paper-asymmetric",
+                             "hybrid": "paper-asymmetric-hybrid-eps1"},
+                            ["analytic", "pymunk"], size="quick", store=tmp_path, workers=1,
+                            progress=False)
+    assert "error" not in sec, sec.get("error")
+    assert [f["label"] for f in sec["frames"]] == ["free-standing", "hybrid"]
+    for f in sec["frames"]:
+        r = f["runs"]
+        assert (r["status"] == "ok").all()
+        assert len(r[r["backend"] == "analytic"]) == 2 * 2 * 3
+        assert len(r[r["backend"] == "pymunk"]) == 1 * 2 * 2
+        # the weakest step (PGA 2 m/s^2 of the median record) overturns neither frame
+        low = r[r["scale"] == r["scale"].min()]
+        assert not low["overturned"].any()
+
+
+def test_peaks_below_the_uplift_threshold_count_as_no_rocking():
+    """A rigid model's 0 and an engine's elastic contact deflection (1e-5 alpha) are the same
+    answer, not rocking: below uplift_tol (1e-3 alpha) the peaks tie at 0. Above it they count."""
+    rigid, soft = np.zeros(20), np.full(20, 1.2e-5)
+    none = np.zeros(20, bool)
+    assert peak_test(rigid, none, soft, none)["p_value"] < 1e-6          # without the floor
+    assert peak_test(rigid, none, soft, none, floor=1e-3)["p_value"] == 1.0
+    assert peak_test(rigid, none, soft + 0.01, none, floor=1e-3)["p_value"] < 1e-6
+    caps = _quantile_capacities(10, 2.0, 0.4)
+    ref = _ensemble(caps, [0.2, 3.0])
+    eng = ref.assign(backend="engine")
+    eng.loc[eng["peak"] == 0.0, "peak"] = 1e-5
+    ref.loc[ref["scale"] == 0.2, "peak"] = 0.0
+    eng.loc[eng["scale"] == 0.2, "peak"] = 1.5e-5
+    a = analyse(pd.concat([ref, eng]), n_boot=20)
+    assert a["backends"]["engine"]["p_value"] == 1.0
