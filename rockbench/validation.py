@@ -18,6 +18,9 @@ the analytic model, and split into a **choice** part and a **held-out** part.
   phases of small uplift, where soft contacts swallow small rockings (a record whose analytic
   peak stays below :data:`MIN_PEAK` alpha is left out).
 
+On a mirror-symmetric structure (equal thresholds, restitution and fall angles both ways) a
+case and its sign-flipped twin are the same physics: only the positive sign is kept.
+
 Every case has a *group* (free | away:<shape><sign> | near | overturn | record). Within a group
 (the away cells of the four pulses together) the cases are put in a seeded, deterministic order
 (sha256 of the seed and the case name); a set of size ``quick`` / ``default`` / ``full`` takes,
@@ -41,6 +44,7 @@ from .errors import ParameterError
 from .maps import NEAR_BOUNDARY_MARGIN
 
 __all__ = ["ValidationCase", "validation_set", "candidate_cases", "overturn_threshold",
+           "mirror_symmetric",
            "uplift_threshold", "SIZES", "GROUP_SIZES", "NEAR_MARGIN", "W_GRID", "SEED"]
 
 # The design (the analytic model chooses the cells; see the module docstring)
@@ -236,17 +240,35 @@ def _short(shape: str, sign: int) -> str:
     return f"{'symm' if shape == 'symmetric' else 'anti'}{'+' if sign > 0 else '-'}"
 
 
+def mirror_symmetric(scene) -> bool:
+    """True when the structure is its own mirror image (equal uplift thresholds, restitution
+    coefficients and fall angles both ways): a case and its sign-flipped twin are then the same
+    physics, so the evidence keeps one of them (else a held-out case could be the mirror image
+    of a choice case)."""
+    from .analytic.reference import reference_of
+
+    ref = reference_of(scene)
+    lam, eta, fall = ref.lam, ref.eta, scene.fall_angles
+    close = lambda a, b: abs(a - b) <= 1e-9 * max(abs(a), abs(b), 1e-300)  # noqa: E731
+    return (close(float(lam[1]), -float(lam[-1])) and close(float(eta[1]), float(eta[-1]))
+            and close(float(fall[1]), float(fall[-1])))
+
+
 @functools.lru_cache(maxsize=16)
 def _candidates(key: str) -> tuple[tuple[str, dict[str, Any]], ...]:
-    """(group, description) of every candidate case of the scene, in a fixed order."""
+    """(group, description) of every candidate case of the scene, in a fixed order (one sign
+    only for a mirror-symmetric structure)."""
     scene = _scene_from_key(key)
+    signs = (1,) if mirror_symmetric(scene) else (1, -1)
     out: list[tuple[str, dict[str, Any]]] = []
     for f in _FREE_PHI0:
-        for s in (1, -1):
+        for s in signs:
             out.append(("free", {"kind": "free", "f": f, "s": s}))
     A_up = uplift_threshold(scene)
     for W in W_GRID:
         for shape, sign in _PULSES:
+            if sign not in signs:
+                continue
             A_ov = overturn_threshold(scene, W, shape, sign)
             if not math.isfinite(A_ov):
                 continue
@@ -265,7 +287,7 @@ def _candidates(key: str) -> tuple[tuple[str, dict[str, Any]], ...]:
     pga_up = 9.81 * A_up * math.tan(scene.alpha)
     for rec in bundled_records():
         for f in RECORD_FACTORS:
-            for s in (1, -1):
+            for s in signs:
                 out.append(("record", {"kind": "record", "path": str(rec["path"]),
                                        "name": rec["name"], "f": f, "s": s,
                                        "pga_target": f * pga_up}))

@@ -147,6 +147,22 @@ def test_split_is_disjoint_deterministic_and_seeded():
         T.validation_set(BLOCK, size="huge")
 
 
+def test_a_mirror_symmetric_structure_has_no_mirror_twins_in_its_evidence():
+    """On Housner's block (its own mirror image) a case and its sign-flipped twin are the same
+    physics: the evidence keeps one sign, so no held-out case mirrors a choice case. The
+    asymmetric frame keeps both signs."""
+    from rockbench.validation import mirror_symmetric
+
+    assert mirror_symmetric(BLOCK)
+    assert not mirror_symmetric(rb.load_scene("paper-asymmetric"))
+    for c in T.validation_set(BLOCK, size="full"):
+        if c.motion is None:
+            assert c.phi0 > 0
+        else:
+            m = dict(c.motion)
+            assert m.get("sign", 1) == 1 and m.get("scale", 1.0) > 0
+
+
 def test_quick_is_a_subset_of_default_and_full():
     q, d, f = (T.validation_set(BLOCK, size=s) for s in ("quick", "default", "full"))
     assert _phys(q) <= _phys(d) <= _phys(f)       # the same cells, to the digit
