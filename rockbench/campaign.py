@@ -479,45 +479,39 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                                quick=quick, records_dir=records_dir, store_dir=store_dir,
                                fingerprint=fingerprint, engine_versions=_engine_versions(),
                                files=list(files))
+    from .report.choice_page import choice_html, work_precision_html
+    from .report.decision import decision_html
     from .report.maps_page import maps_html
 
-    at = next((i for i, sec in enumerate(sections) if sec[0] == "settings-section"),
-              len(sections))
     mp = plan["maps"]
     g = mp["analytic_grid"]
-    from .report.choice_page import choice_html
-
-    sections.insert(at, ("choice-section", "Choosing a modelling approach",
-                         choice_html(choice, out / "figures", with_work_precision=False)))
-    at += 1
-    sections.insert(at, ("maps-section", "Overturning maps (paper Figs. 4-7)", maps_html(
-        maps, out / "figures",
-        analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
-                      f"W in {mp['analytic_frequency']}, pulse window + 10 s",
-        axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
-             f"+ {mp['engine_tail']:g} s")))
+    sections["choice-section"] = ("Choosing a modelling approach",
+                                  choice_html(choice, out / "figures", with_work_precision=False))
+    sections["maps-section"] = (
+        "Overturning maps" + (" (paper Figs. 4-7)" if paper else ""), maps_html(
+            maps, out / "figures",
+            analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
+                          f"W in {mp['analytic_frequency']}, pulse window + 10 s",
+            axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
+                 f"+ {mp['engine_tail']:g} s"))
     if frag:                                   # issue 26: report/fragility_figures.py
         from .report.fragility_figures import fragility_html
-        at += 1
-        sections.insert(at, ("fragility-section", "Fragility over records (paper Fig. 9)",
-                             fragility_html(frag, out / "figures")))
+        sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)" if paper
+                                                                     else ""),
+                                         fragility_html(frag, out / "figures"))
     # the decision first (report/decision.py): the advice, one row per engine, work-precision
-    from .report.choice_page import work_precision_html
-    from .report.decision import decision_html
-
-    sections.insert(0, ("decision-section", "Which engine and settings", decision_html(
-        choice["advice"], scene=choice.get("scene", "the structure"),
-        structure=plan.get("description", ""), agreement=maps["agreement"],
-        eta_summary=eta_summary, breaks=choice.get("breaks"),
-        work_precision_html=work_precision_html(choice, out / "figures",
-                                                scene=choice.get("scene", "the structure")))))
+    scene_word = choice.get("scene", "the structure")
+    sections["decision-section"] = ("Which engine and settings", decision_html(
+        choice["advice"], scene=scene_word, structure=plan.get("description", ""),
+        agreement=maps["agreement"], eta_summary=eta_summary, breaks=choice.get("breaks"),
+        work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
     timings["report"] = time.perf_counter() - t
     total = time.perf_counter() - t_start
     cpu = sum(float(p.get("cpu_s", 0.0)) for p in payloads + dt_payloads)
-    sections.append(("runtime-section", "Run time",
-                     P.runtime_html(timings, total, workers or cpu_count(), cpu)))
+    sections["runtime-section"] = ("Run time", P.runtime_html(timings, total,
+                                                              workers or cpu_count(), cpu))
     path = out / "index.html"
-    path.write_text(P.render(sections, quick=quick, with_records=bool(len(records)),
+    path.write_text(P.render(P.ordered(sections), quick=quick, with_records=bool(len(records)),
                              about=None if paper else plan.get("description", "")),
                     encoding="utf-8")
     return path

@@ -15,7 +15,25 @@ from . import figures as F
 from . import html as H
 from .tables import CAMPAIGN_COLUMNS
 
-__all__ = ["page_sections", "runtime_html", "render", "fracture_html", "band_summary_html"]
+__all__ = ["page_sections", "runtime_html", "render", "fracture_html", "band_summary_html",
+           "SECTION_ORDER", "ordered"]
+
+#: The page's sections, in the order a reader asks: the decision, the findings, the evidence
+#: per question, the choice's details, maps and fragility, then settings, tables and run time.
+SECTION_ORDER = ("decision-section", "conclusion-section", "summary-section",
+                 "histories-section", "cases-section", "fracture-section", "eta-section",
+                 "speed-section", "map-section", "records-section", "choice-section",
+                 "maps-section", "fragility-section", "settings-section", "files-section",
+                 "runtime-section")
+
+
+def ordered(sections: Mapping[str, tuple[str, str]]) -> list[tuple[str, str, str]]:
+    """(id, title, html) of ``sections`` (id -> (title, html)) in :data:`SECTION_ORDER`; an
+    id outside it is an error (a new section gets its place there)."""
+    unknown = [k for k in sections if k not in SECTION_ORDER]
+    if unknown:
+        raise ValueError(f"sections without a place in SECTION_ORDER: {unknown}")
+    return [(k, *sections[k]) for k in SECTION_ORDER if k in sections]
 
 
 def render(sections, *, quick: bool, with_records: bool, about: str | None = None) -> str:
@@ -105,9 +123,10 @@ def _details(summary: str, inner: str, *, open_: bool = False) -> str:
 
 def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, engines_tab,
                   speed, omap, records, lines, notes, figdir, *, quick, records_dir, store_dir,
-                  fingerprint, engine_versions, files) -> list[tuple[str, str, str]]:
-    """The sections (id, title, html) of the campaign page, from its tables and comparison
-    payloads (each with a ``label``); figures are written under ``figdir``.
+                  fingerprint, engine_versions, files) -> dict[str, tuple[str, str]]:
+    """The sections (id -> (title, html)) of the campaign page that its tables and comparison
+    payloads (each with a ``label``) make; figures are written under ``figdir``. The campaign
+    adds its other parts' sections and :func:`ordered` puts them in place.
 
     ``plan``: the campaign plan (:func:`rockbench.sweep.cases.campaign_plan`); ``names``: the
     backends that ran, ``missing``: those not available; ``lines``: the conclusion; ``notes``:
@@ -118,7 +137,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     for tab in CAMPAIGN_COLUMNS.values():
         for k, v in tab.items():
             units.setdefault(k, v)
-    sections: list[tuple[str, str, str]] = []
+    sections: dict[str, tuple[str, str]] = {}
 
     # findings (the decision above them is assembled by the campaign: report/decision.py)
     conc = _details(f"All findings, in words ({len(lines)})", H.conclusion_html(lines),
@@ -126,7 +145,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     if notes:
         conc += "<h3>Notes</h3><ul>" + "".join(f"<li>{H.escape(n)}</li>" for n in notes) + \
             "</ul>"
-    sections.append(("conclusion-section", "Findings", conc))
+    sections["conclusion-section"] = ("Findings", conc)
 
     # engine summary
     eng_cols = list(CAMPAIGN_COLUMNS["engines.csv"])
@@ -135,7 +154,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
                 "eta_mean_rel_error": "eta_mean_rel_error"}
     summ = H.grade_legend() + H.html_table(engines_tab, eng_cols, units=units, grade_as=grade_as,
                                            table_id="engines", scroll=True)
-    sections.append(("summary-section", "Summary per engine", summ))
+    sections["summary-section"] = ("Summary per engine", summ)
 
     # histories
     hist = []
@@ -159,9 +178,9 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
                  f"Grey: +-[low, high] of the analytic model's sensitivity band of the peak "
                  f"(docs/records.md).",
             name=f"histories_{scene}", png_dir=figdir))
-    sections.append(("histories-section", "Rotation histories",
+    sections["histories-section"] = ("Rotation histories",
                      _details(f"Rotation histories of every pulse case ({len(pulses)} cases)",
-                              "\n".join(hist)) if hist else "<p>No pulse case finished.</p>"))
+                              "\n".join(hist)) if hist else "<p>No pulse case finished.</p>")
 
     # pulse table
     shown = H.with_derived(metrics) if len(metrics) else metrics
@@ -173,16 +192,16 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
         cols[4:4] = ["band_low", "band_high", "within_band", "band_distance"]
     pulse_rows = shown[shown["part"] == "pulse"] if len(shown) else shown
     tab = H.html_table(pulse_rows, cols, units=units, table_id="cases", scroll=True)
-    sections.append(("cases-section", "Every pulse case",
+    sections["cases-section"] = ("Every pulse case",
                      band_summary_html(pulse_rows, "pulse-case peaks")
                      + _details(f"The table of every pulse case ({len(pulse_rows)} runs)",
                                 H.grade_legend() + tab)
-                     + '<p>All columns: <a href="metrics.csv">metrics.csv</a>.</p>'))
+                     + '<p>All columns: <a href="metrics.csv">metrics.csv</a>.</p>')
 
     # fracture cases
     frac = shown[shown["part"] == "fracture"] if len(shown) else shown
     if len(frac):
-        sections.append(("fracture-section", "Fracture", fracture_html(frac, units)))
+        sections["fracture-section"] = ("Fracture", fracture_html(frac, units))
 
     # eta
     etah = []
@@ -210,8 +229,8 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             "eta [-] of every impact of one free-rocking run (engines: measured from their "
             "motion; analytic dashed), per direction; right: mean +- standard deviation.",
             name="eta_per_impact", png_dir=figdir))
-    sections.append(("eta-section", "Coefficient of restitution", "\n".join(etah) or
-                     "<p>No free-rocking run finished.</p>"))
+    sections["eta-section"] = ("Coefficient of restitution", "\n".join(etah) or
+                     "<p>No free-rocking run finished.</p>")
 
     # speed
     sp = []
@@ -240,8 +259,8 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             "over its runs in the sweep).", name="speed_accuracy", png_dir=figdir))
         sp.append(H.html_table(speed, list(CAMPAIGN_COLUMNS["speed_accuracy.csv"]),
                                units=units, scroll=True))
-    sections.append(("speed-section", "Speed against accuracy", "\n".join(sp) or
-                     "<p>No engine besides the analytic reference.</p>"))
+    sections["speed-section"] = ("Speed against accuracy", "\n".join(sp) or
+                     "<p>No engine besides the analytic reference.</p>")
 
     # map
     mp = []
@@ -256,11 +275,11 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
         mp.append("<details><summary>map points (table)</summary>" + H.html_table(
             omap, list(CAMPAIGN_COLUMNS["overturning_map.csv"]), units=units, scroll=True)
             + "</details>")
-    sections.append(("map-section", "Overturning map", "\n".join(mp) or "<p>No map.</p>"))
+    sections["map-section"] = ("Overturning map", "\n".join(mp) or "<p>No map.</p>")
 
     # records
     if len(records):
-        sections.append(("records-section", "Records (paper Fig. 9)", H.figure_html(
+        sections["records-section"] = ("Records (paper Fig. 9)", H.figure_html(
             F.plot_record_peaks(records, title="Peak rotation per record"),
             "Peak rotation max |phi| / alpha [-] of the free-standing and the hybrid "
             "(eps_f = 1 %) asymmetric frame under each record, as recorded (filled) and "
@@ -269,7 +288,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             "1 %), half-sample resampling; docs/records.md).", name="record_peaks",
             png_dir=figdir) + band_summary_html(records) + "<details><summary>record runs (table)</summary>" + H.html_table(
                 records, list(CAMPAIGN_COLUMNS["record_peaks.csv"]), units=units,
-                scroll=True) + "</details>"))
+                scroll=True) + "</details>")
 
     # settings
     items = [("engines", ", ".join(names)),
@@ -294,8 +313,8 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     sett = (H._dl(items) + "<h3>Backend settings (defaults, all cases but the time-step sweep)"
             "</h3>" + H._dl((f"settings {k}", v) for k, v in default_settings.items())
             + "<h3>Versions</h3>" + H.versions_html(engine_versions))
-    sections.append(("settings-section", "Settings and versions", sett))
+    sections["settings-section"] = ("Settings and versions", sett)
     links = ", ".join(f'<a href="{f}">{f}</a>' for f in files)
-    sections.append(("files-section", "Tables", f"<p>{links}. Columns and units: "
-                     f"docs/report.md.</p>"))
+    sections["files-section"] = ("Tables", f"<p>{links}. Columns and units: "
+                     f"docs/report.md.</p>")
     return sections
