@@ -460,7 +460,7 @@ def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], u
     if not where and not median_differs:
         return True, (f"{engine}: statistically indistinguishable from the {reference} model at "
                       f"the 5 % level (peak distributions at {len(tested)} intensities, "
-                      f"smallest p = {_fmt(pmin)}, Holm-adjusted; {med}"
+                      f"smallest p = {_fmt(pmin)}, none rejected by Holm; {med}"
                       + (", the interval holds 0)." if judged else ")."))
     bits = []
     if where:
