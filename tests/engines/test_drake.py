@@ -136,10 +136,10 @@ def test_static_sink_is_the_pair_stiffness(block):
 
 
 def test_pair_friction_is_the_settings_friction():
-    """Under a constant horizontal ground acceleration of 0.5 g a squat block (b/h = 4: it
-    cannot rock) slides if mu < 0.5, with the acceleration (0.5 - mu) g, and sticks if mu > 0.5:
+    """Under a constant horizontal ground acceleration of 0.5 g a squat block (b/h = 1.4: it
+    rocks only above 1.4 g) slides if mu < 0.5, with the acceleration (0.5 - mu) g, and sticks if mu > 0.5:
     Drake combines the two geometries' coefficients, each pair gets ``friction``."""
-    wide = Scene(name="wide", structure=Block(width=4.0, height=1.0))
+    wide = Scene(name="wide", structure=Block(width=1.4, height=1.0))
     for mu, slides in ((0.4, True), (0.6, False)):
         b = _built(wide, friction=mu)
         try:
