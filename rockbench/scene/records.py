@@ -205,6 +205,11 @@ def _read_listing(csv_path: Path) -> dict[str, dict[str, Any]]:
     """``records.csv`` as {file stem: {"dt": s, "units": ...}}; RecordError if unreadable or
     without a dt column (``dt_s`` or ``dt``)."""
     try:
+        size = csv_path.stat().st_size
+        _, max_bytes = limit("record_bytes")
+        if size > max_bytes:
+            raise RecordError(f"{csv_path} has {size} bytes, more than {max_bytes:g} "
+                              f"({override_hint('record_bytes')})")
         with open(csv_path, newline="", encoding="utf-8") as f:
             rows = list(csv.DictReader(f))
     except (OSError, UnicodeDecodeError, csv.Error) as e:

@@ -406,3 +406,22 @@ def test_load_record_at2_options_must_agree_with_file(tmp_path):
         load_record(path, dt=0.02)
     with pytest.raises(ParameterError, match="record-units"):
         load_record(path, units="cm/s2")
+
+
+def test_records_csv_units_are_parsed_and_bounded(tmp_path, monkeypatch):
+    """records.csv units: 'gal' was read as g (it starts with "g") and 'mm/s^2' as cm/s^2 (the
+    fallback); now every spelling is parsed, an unknown one names the file and the record, and
+    the listing is size-limited like a record file."""
+    from rockbench.scene.records import listed_metadata
+
+    (tmp_path / "a.dat").write_text("1 2 3\n")
+    listing = tmp_path / "records.csv"
+    for cell, units in (("gal", "cm/s2"), ("mm/s^2 (scaled)", "mm/s2"), ("G", "g"), ("", "cm/s2")):
+        listing.write_text(f"record,dt_s,units\na,0.01,{cell}\n")
+        assert listed_metadata(tmp_path / "a.dat")["units"] == units
+    listing.write_text("record,dt_s,units\na,0.01,furlongs\n")
+    with pytest.raises(RecordError, match="records.csv.*'a'.*furlongs"):
+        listed_metadata(tmp_path / "a.dat")
+    monkeypatch.setenv("ROCKBENCH_RECORD_BYTES", "10")
+    with pytest.raises(RecordError, match="records.csv has .* bytes"):
+        listed_metadata(tmp_path / "a.dat")
