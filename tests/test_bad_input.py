@@ -481,3 +481,28 @@ def test_record_samples_limit_holds_for_every_loader(monkeypatch, tmp_path):
         Record.from_samples(np.zeros(101), 0.01)
     with pytest.raises(ParameterError, match="time.*at most 100 samples"):
         Record(np.arange(101.0), np.zeros(101))
+
+
+@pytest.mark.parametrize("engine, setting, name", [
+    ("pymunk", "iterations=1000000000000", "iterations"),
+    ("mujoco", "iterations=1000000000000", "iterations"),
+    ("mujoco", "impedance=0.99999", "impedance"),
+    ("mujoco", "friction=1e-6", "friction"),
+    ("pybullet", "solver_iterations=2147483648", "solver_iterations"),
+    ("opensees", "iterations=2147483648", "iterations"),
+    ("opensees", "tolerance=1e-300", "tolerance"),
+])
+def test_an_impossible_setting_is_bad_input_not_divergence(capsys, engine, setting, name):
+    """--setting iterations=1000000000000 (pymunk) exited 0 as "diverged: OverflowError": an
+    impossible setting is refused with one line naming it (exit 2)."""
+    refused(capsys, "run", "housner-block", "--engine", engine, "--phi0-alpha", "0.5",
+            "--duration", "0.2", "--setting", setting, names=(name,))
+
+
+def test_a_scene_mujoco_cannot_build_is_bad_input(capsys):
+    """A 1 x 2 x 1 mm block of density 1 kg/m^3 (inside every scene limit) has an inertia below
+    MuJoCo's mjMINVAL: the engine's refusal to build is one line (exit 2), not "diverged"."""
+    line = refused(capsys, "run", "housner-block", "--engine", "mujoco", "--phi0-alpha", "0.5",
+                   "--duration", "0.2", "--set", "width=1e-3", "--set", "height=2e-3",
+                   "--set", "depth=1e-3", "--set", "density=1", names=("mjMINVAL", "scene"))
+    assert "mujoco refused it" in line
