@@ -52,6 +52,7 @@ class ContactProbe:
             for name, (lx, ly) in _corners(sp).items():
                 self.rest[(i, name)] = (sp.x + lx, sp.y + ly)
         self.beam = specs[1] if self.frame else None
+        self._table = None             # corners for the compiled probe (built on first use)
 
     def measure(self, state: np.ndarray, mode: int) -> tuple[float, float, bool]:
         """(penetration [m], sliding [m], contact opened) for one state (n_bodies, 6) and
@@ -63,7 +64,32 @@ class ContactProbe:
     def measure_many(self, states: np.ndarray, modes: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Vectorized :meth:`measure` over states (n, n_bodies, 6) and modes (n,): arrays of
-        penetration [m], sliding [m] and opened flags."""
+        penetration [m], sliding [m] and opened flags. Compiled (numba: one pass over the
+        samples, a map cell probes every sample) when numba imports; the same arithmetic as
+        :meth:`measure_numpy` (``tests/engines/test_fast_paths.py``)."""
+        if _probe_kernel is None:
+            return self.measure_numpy(states, modes)
+        states = np.ascontiguousarray(states, dtype=float)
+        modes = np.ascontiguousarray(modes, dtype=np.float64)
+        n = states.shape[0]
+        pen, slide, opened = np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.bool_)
+        if self._table is None:
+            rows = []
+            for i in self.cols:
+                sp = self.specs[i]
+                for k, (name, (lx, ly)) in enumerate(_corners(sp).items()):
+                    if name in ("tl", "tr") and not self.frame:
+                        continue
+                    rows.append((i, lx, ly, k, self.rest[(i, name)][0], self.base_y[i]))
+            self._table = np.array(rows, dtype=float)
+        bh, bx = (self.beam.half_height, self.beam.x) if self.frame else (0.0, 0.0)
+        _probe_kernel(states, modes, self._table, self.frame, self.tol, self.open_tol, bh, bx,
+                      pen, slide, opened)
+        return pen, slide, opened
+
+    def measure_numpy(self, states: np.ndarray, modes: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`measure_many` in numpy (vectorized over the samples): the reference."""
         states = np.asarray(states, dtype=float)
         modes = np.asarray(modes)
         n = states.shape[0]
@@ -100,6 +126,50 @@ class ContactProbe:
                 np.maximum(slide, np.where(touch, np.abs(tang), 0.0), out=slide)
                 opened |= (gap > self.open_tol) & (pivot | ~rocking)
         return pen, slide, opened
+
+
+def _probe(states, modes, table, frame, tol, open_tol, beam_hh, beam_x, pen, slide, opened):
+    """:meth:`ContactProbe.measure_numpy` sample by sample: ``table`` rows (body, lx, ly,
+    corner 0 bl / 1 br / 2 tl / 3 tr, rest x, base y) in the numpy loop's order."""
+    for j in range(states.shape[0]):
+        mode = modes[j]
+        rocking = mode != 0.0
+        if frame:
+            bxj, byj, bth = states[j, 1, 0], states[j, 1, 1], states[j, 1, 2]
+            bc, bs_ = np.cos(bth), np.sin(bth)
+        p, sl, op = 0.0, 0.0, False
+        for r in range(table.shape[0]):
+            i = int(table[r, 0])
+            lx, ly, kind, rx0 = table[r, 1], table[r, 2], int(table[r, 3]), table[r, 4]
+            x, y, th = states[j, i, 0], states[j, i, 1], states[j, i, 2]
+            c, s = np.cos(th), np.sin(th)
+            X = x + c * lx - s * ly
+            Y = y + s * lx + c * ly
+            if kind < 2:
+                gap = Y - table[r, 5]
+                tang = X - rx0
+                pivot = mode > 0.0 if kind == 0 else mode < 0.0
+            else:
+                rx, ry = X - bxj, Y - byj
+                u = bc * rx + bs_ * ry
+                v = -bs_ * rx + bc * ry
+                gap = -(v + beam_hh)
+                tang = u - (rx0 - beam_x)
+                pivot = mode > 0.0 if kind == 3 else mode < 0.0
+            if -gap > p or gap != gap:               # NaN propagates as np.maximum's
+                p = -gap
+            if gap < tol and (abs(tang) > sl or tang != tang):
+                sl = abs(tang)
+            if gap > open_tol and (pivot or not rocking):
+                op = True
+        pen[j], slide[j], opened[j] = p, sl, op
+
+
+try:
+    from numba import njit as _njit
+    _probe_kernel = _njit(cache=True)(_probe)
+except ImportError:  # pragma: no cover - numba is a dependency
+    _probe_kernel = None
 
 
 def contact_diagnostics(scene: Scene, state: np.ndarray, mode: int) -> tuple[float, float, bool]:
