@@ -100,7 +100,10 @@ class _Lines(_Null):
         return text + (f" [{self.postfix}]" if self.postfix else "")
 
     def _emit(self) -> None:
-        print(self._line(), file=self.stream or sys.stderr, flush=True)
+        try:
+            print(self._line(), file=self.stream or sys.stderr, flush=True)
+        except (OSError, ValueError):   # stderr closed: progress is never worth an error
+            pass
         self.printed = True
         self.last = time.monotonic()
 
@@ -128,9 +131,9 @@ class _Lines(_Null):
 def bar(total: float | None, desc: str, unit: str = "it", *, show: bool = True):
     """A progress bar for ``total`` items (tqdm's interface): a tqdm bar when stderr is a
     terminal, :class:`_Lines` otherwise, nothing when ``show`` is false or progress is quiet."""
-    if not show or _quiet:
+    if not show or _quiet or sys.stderr is None:
         return _Null()
-    if sys.stderr is not None and sys.stderr.isatty():
+    if sys.stderr.isatty():
         from tqdm.auto import tqdm
 
         return tqdm(total=total, desc=desc, unit=unit, dynamic_ncols=True)
