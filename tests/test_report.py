@@ -316,8 +316,12 @@ def test_quick_campaign_conclusion_quotes_the_tables(quick):
     # the headline is the measured advice (CPU cost), not a median ranking or a wall-time one
     adv = pd.read_csv(path.parent / "advice.csv")
     best = adv[(adv["tolerance"] == 0.02) & (adv["rank"] == 1)].iloc[0]
-    assert text.lstrip().startswith("Within 2 % of the analytic model")
-    assert best["status"] == "meets" and f"use {best['engine']} with {best['setting']}" in text
+    if best["status"] == "meets":
+        assert text.lstrip().startswith("Within 2 % of the analytic model")
+        assert f"use {best['engine']} with {best['setting']}" in text
+    else:   # the quick sweep has two steps: a setting it cannot confirm is not recommended
+        assert text.lstrip().startswith("No engine reaches 2 % on paper-asymmetric")
+        assert f"{best['engine']} ({best['status']}" in text
     assert "Closest to the analytic model" not in text and "Fastest engine" not in text
     ag = pd.read_csv(path.parent / "map_agreement.csv")
     assert f"{100 * ag['agree_fraction'].iloc[0]:.1f} % of the verdicts agree" in text

@@ -46,6 +46,17 @@ def test_one_sentence_per_tolerance_names_engine_setting_cost_and_held_out_error
     assert "no engine reaches it" in s[1] and "closest: mujoco (0.21 %" in s[1]
 
 
+def test_a_setting_within_the_tolerance_but_unconfirmed_is_said_so():
+    adv = _advice()
+    adv.loc[0, "status"] = "unconfirmed"
+    adv.loc[1, "status"] = "fails held-out"
+    s = decision_sentences(adv, "x")
+    assert s[0].startswith("For 2 % on x: no setting is confirmed. mujoco at dt=0.001")
+    assert "fails on the held-out cases" in s[0]
+    t = decision_table(adv)
+    assert t.set_index("engine").loc["pymunk", "within 2 %"].startswith("unconfirmed (best")
+
+
 def test_without_held_out_column_the_sentence_does_not_invent_one():
     s = decision_sentences(_advice(held_out=False), "x")
     assert "held-out" not in s[0]

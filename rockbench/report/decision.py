@@ -20,6 +20,13 @@ import pandas as pd
 
 __all__ = ["decision_sentences", "decision_table", "decision_html", "pct"]
 
+#: Advice statuses of a setting within the tolerance on the chosen cases that is not
+#: recommended, and why (rockbench.advise.decide).
+_ALMOST = {"unconfirmed": "unconfirmed: no finer step was run, or the finer one misses the "
+                          "tolerance (docs/choosing.md, convergence)",
+           "fails held-out": "it fails on the held-out cases",
+           "lucky steps only": "only at isolated steps: its error is erratic against dt"}
+
 #: Columns that may hold the error on held-out cases, in order of preference.
 _HELD_OUT = ("held_out_worst_error", "heldout_worst_error", "confirm_worst_error")
 
@@ -76,11 +83,21 @@ def decision_sentences(advice: pd.DataFrame, scene: str) -> list[str]:
                          f"({_num(n['cpu_per_sim_s']):.3g} CPU s/s)")
             out.append(text + ".")
         else:
+            t = pct(tol, 1 if tol < 0.01 else 0)
             best = g.assign(_e=g["worst_error"].astype(float)).sort_values("_e")
             best = best[best["_e"].notna() & (best["_e"] < math.inf)]
-            if len(best):
+            near = best[best["status"].astype(str).isin(_ALMOST)] if len(best) else best
+            if len(near):
+                b = near.iloc[0]
+                ho = _held_out(b)
+                out.append(f"For {t} on {scene}: no setting is confirmed. {b['engine']} at "
+                           f"{b['setting']} has a worst error of {pct(b['worst_error'])} on the "
+                           "chosen cases" + (f" and {pct(ho)} held out" if math.isfinite(ho)
+                                             else "")
+                           + f", but {_ALMOST[str(b['status'])]}.")
+            elif len(best):
                 b = best.iloc[0]
-                out.append(f"For {pct(tol, 1 if tol < 0.01 else 0)} on {scene}: no engine "
+                out.append(f"For {t} on {scene}: no engine "
                            f"reaches it at the settings tried; closest: {b['engine']} "
                            f"({pct(b['worst_error'])} at {b['setting']}).")
             else:
@@ -132,8 +149,12 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
             else:
                 r = g.iloc[0]
                 err = _num(r.get("worst_error"))
-                row[f"within {t}"] = ("not reached" + (f" (best {pct(err)})"
-                                                       if math.isfinite(err) else ""))
+                st = str(r.get("status", ""))
+                word = st if st in _ALMOST else "not reached"
+                row[f"within {t}"] = (word + (f" (best {pct(err)} at {r['setting']})"
+                                              if math.isfinite(err) and st in _ALMOST else
+                                              f" (best {pct(err)})" if math.isfinite(err)
+                                              else ""))
         if agreement is not None and len(agreement):
             a = agreement[agreement["backend"] == e]
             if scene is not None and "scene" in a and (a["scene"] == scene).any():
