@@ -3,9 +3,11 @@
 Two formats (see ``shared/records/PROVENANCE.md``):
 
 * PEER AT2 (:func:`load_at2`): a text header whose line with ``NPTS`` and ``DT`` gives the
-  number of samples and the time step [s], followed by the samples in units of g, any number per
-  line. Both the old PEER layout (``NPTS=  4000, DT= .01000 SEC``, text may follow) and the
-  NGA-West2 layout (``  4000   0.0100   NPTS, DT``) are recognised. g is converted with
+  number of samples and the time step [s], followed by the samples, any number per line, in
+  the units the header states (``UNITS OF G``, ``UNITS: CM/S^2``, ...: every spelling of
+  :mod:`rockbench.scene.units`; an unknown unit is refused, none needs ``units``). Both the old
+  PEER layout (``NPTS=  4000, DT= .01000 SEC``, text may follow) and the NGA-West2 layout
+  (``  4000   0.0100   NPTS, DT``) are recognised. g is converted with
   :data:`rockbench.constants.G_STANDARD` so published PGAs are reproduced.
 * Headerless columns (:func:`load_columns`): whitespace-separated samples, any number per line,
   read row-major (e.g. the SAC ``LA*.dat`` files, 6 per line, cm/s^2); the time step and units
@@ -14,8 +16,9 @@ Two formats (see ``shared/records/PROVENANCE.md``):
   uniformly with the given time step (see :func:`load_columns`).
 
 Shape checks (``docs/errors.md``): a file must be a regular file of at most
-``ROCKBENCH_RECORD_BYTES`` (:mod:`rockbench.limits`, 100 MB); the AT2 header count NPTS must
-equal the number of values; :func:`load_record` refuses a time step outside (1e-4, 0.1) s
+``ROCKBENCH_RECORD_BYTES`` (:mod:`rockbench.limits`, 100 MB) holding at most
+``record_samples`` (2e6) values, parsed in blocks so that memory stays bounded whatever the
+file holds; the AT2 header count NPTS must equal the number of values; :func:`load_record` refuses a time step outside (1e-4, 0.1) s
 (limit ``record_dt``).
 
 :func:`load_record` picks the loader from the file suffix. Every failure raises
