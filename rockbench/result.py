@@ -164,6 +164,8 @@ class Summary:
 def _short_summary(s: "Summary") -> str:
     verdict = (f"overturned at t = {s.t_overturn:.3f} s" if s.overturned and s.t_overturn
                is not None else "overturned" if s.overturned else "survived")
+    if s.status != "ok" and not s.overturned:
+        verdict = "no verdict of its own"    # the reason says what is known (docs/errors.md)
     text = (f"{s.status}, max|phi|/alpha = {s.max_abs_phi_over_alpha:.4g}, {verdict}, "
             f"{s.n_impacts} impacts")
     if s.fractured:
