@@ -98,9 +98,9 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
             f"{len(e_ladder)} of these factors ({', '.join(f'{s:.3g}' for s in e_ladder)})"
             + ("" if size == "full" else "; the whole ladder for every engine with "
                "rockbench report --full")
-            + ". The tests and the difference of the medians compare the runs both made; the "
-              "analytic curve is drawn from the runs the engines made too (its whole-ladder fit "
-              "is in fragility.csv). docs/fragility.md defines every number.")
+            + ". The analytic curve drawn is its fit on the whole ladder; the tests and the "
+              "difference of the medians compare only the runs both made (fragility.csv has both "
+              "analytic fits). docs/fragility.md defines every number.")
     return {"what": what, "frames": out_frames, "fig9": True, "size": size,
             "records": recs, "scales": ladder.tolist(), "engine_scales": e_ladder.tolist()}
 
