@@ -8,7 +8,7 @@ away from its overturning boundary, scaled records) is split, deterministically,
 **choice** part and a **held-out** part. For every engine:
 
 1. **choose**: the engine's precision knob (the time step ``dt``, or what its backend class
-   declares as ``precision_knob`` with the values ``precision_ladder``) is run from the coarsest
+   declares as its first ``precision_sweeps`` curve) is run from the coarsest
    value down on the choice part; the worst validation error of each
    (:func:`rockbench.tradeoff.case_error`) is recorded;
 2. **converge** (:func:`convergence`): a value is accepted only when the next finer one also
@@ -89,17 +89,16 @@ _EVIDENCE = ["engine", "setting", "dt", "worst_error_choice", "worst_error_heldo
 
 
 def precision_knob(engine: str) -> tuple[str, tuple[float, ...]]:
-    """(name, values from coarse to fine) of ``engine``'s precision knob: its backend class's
-    ``precision_knob`` and ``precision_ladder`` attributes when it declares them (e.g. an
+    """(name, values from coarse to fine) of ``engine``'s precision knob: the first of its
+    work-precision curves (:func:`rockbench.tradeoff.precision_sweeps`, the backend class's
+    ``precision_sweeps``) that sweeps its own knob with its own values (e.g. an
     error-controlled integrator's accuracy), else ``("dt", ADVISE_DTS)``."""
-    from .engines import get_backend
+    from .tradeoff import precision_sweeps
 
-    cls = get_backend(engine)
-    knob = getattr(cls, "precision_knob", "dt") or "dt"
-    ladder = getattr(cls, "precision_ladder", None)
-    if ladder is None:
-        ladder = ADVISE_DTS
-    return str(knob), tuple(float(v) for v in ladder)
+    for knob, values, fixed in precision_sweeps(engine):
+        if knob != "dt" and values and not fixed:
+            return str(knob), tuple(float(v) for v in values)
+    return "dt", tuple(ADVISE_DTS)
 
 
 # =========================================================================================
@@ -498,7 +497,7 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
         that cannot run here are listed as unavailable).
     store : directory of the store to reuse and fill (None: nothing kept).
     dts : the ladder of time steps [s] (default: :data:`ADVISE_DTS`, or the engine's own
-        ``precision_ladder``).
+        ``precision_sweeps``).
     quick : the quick evidence (a subset of the default; one repeat);
     full : the full evidence and the contact-parameter search.
     contact : search the contact parameters (default: ``full``).

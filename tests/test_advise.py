@@ -289,3 +289,22 @@ def test_every_contact_variant_is_a_valid_setting_of_its_engine(engine):
     for v in A.CONTACT_VARIANTS[engine]:
         s = cls(**v)
         assert all(getattr(s, k) == x for k, x in v.items())
+
+
+def test_the_advice_follows_the_backends_own_precision_knob():
+    """One declaration for the work-precision and the advice: an engine whose class declares an
+    accuracy curve (Drake's CENIC) is advised on that knob, the others on dt."""
+    import pytest
+
+    from rockbench.advise import ADVISE_DTS, precision_knob
+    from rockbench.tradeoff import precision_sweeps
+
+    assert precision_knob("pymunk") == ("dt", tuple(ADVISE_DTS))
+    try:
+        sweeps = precision_sweeps("drake")
+    except Exception:  # noqa: BLE001
+        pytest.skip("drake not installed")
+    knob, values, fixed = sweeps[0]
+    if knob == "dt":
+        pytest.skip("drake not installed")
+    assert precision_knob("drake") == (knob, tuple(float(v) for v in values))
