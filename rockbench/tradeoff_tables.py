@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from .validation import ValidationCase
 
 __all__ = ["VERDICTS", "precision_sweeps", "case_error", "classify_error", "RUN_COLUMNS",
-           "runs_frame", "add_self_consistency",
+           "runs_frame", "add_self_consistency", "curve_of",
            "TABLE_COLUMNS", "summarize", "Tradeoff", "machine_info"]
 
 #: Classes of agreement with the analytic model, best first (``verdict`` columns of the
@@ -219,7 +219,7 @@ def runs_frame(runs: list[dict[str, Any]]) -> pd.DataFrame:
     return df
 
 
-def _curve(engine: str, label: str) -> dict[str, Any]:
+def curve_of(engine: str, label: str) -> dict[str, Any]:
     """The curve, knob and knob value of a setting label (``"dt=0.001,accuracy=1e-05"``):
     the knob is the engine's own (:func:`precision_sweeps`) when the label sets it, else dt;
     the curve is the engine with the label's other overrides but dt."""
@@ -300,7 +300,7 @@ def summarize(runs: pd.DataFrame) -> pd.DataFrame:
             "cpu_per_sim_s_min": float(np.min(per_rep)) if per_rep else math.nan,
             "cpu_per_sim_s_max": float(np.max(per_rep)) if per_rep else math.nan,
             "repeats": len(per_rep),
-            **_curve(eng, label),
+            **curve_of(eng, label),
             "build_cpu_s": stat(g["build_cpu_s"], np.median),
             "warmup_cpu_s": stat(g["warmup_cpu_s"], np.max),
         }
