@@ -8,8 +8,9 @@
   paper's campaign, with every case chosen from the scenes themselves through the analytic
   model (nothing is taken from the paper's frames):
 
-  - pulse cases at W = 3 and 4 with A = 0.5 x the smallest analytic overturning threshold of
-    the four Ricker pulses at that W (over every scene): each scene rocks and survives;
+  - pulse cases at W = 3 and 4 with A the geometric mean of the largest uplift threshold
+    (A_up = min|lambda| / tan alpha) and the smallest analytic overturning threshold of the four
+    Ricker pulses at that W (over every scene): each scene rocks and survives;
   - the speed sweep's case on the first scene at A = 0.7 x that threshold, W = 4;
   - the summary map of the first scene at A = (0.4, 0.7, 0.9, 1.1, 1.5) x its threshold at W = 3;
   - fracture cases: per scene with fracturing devices, the smallest A (A = 1 .. 60 by factors
@@ -105,6 +106,7 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
     ``folder``: where Scene objects are saved for the worker processes."""
     from .scene.scene import load_scene
     from .sweep.cases import campaign_plan
+    from .validation import uplift_threshold
 
     if not scenes:
         raise ParameterError("scenes", "none", "at least one scene")
@@ -113,6 +115,7 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
     first, sc0 = refs[0], loaded[0]
     a3 = min(_thresholds(s, 3.0) for s in loaded)
     a4 = min(_thresholds(s, 4.0) for s in loaded)
+    a_up = max(uplift_threshold(s) for s in loaded)
     a3_0, a4_0 = _thresholds(sc0, 3.0), _thresholds(sc0, 4.0)
     a10 = _thresholds(sc0, 10.0)
     finite = [x for x in (a3, a4, a3_0, a4_0) if math.isfinite(x)]
@@ -122,6 +125,9 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
                          "write a plan file (rockbench report --plan)")
     fin = lambda x: x if math.isfinite(x) else max(finite)  # noqa: E731
     r2 = lambda x: float(f"{x:.3g}")  # noqa: E731
+    # a pulse case between uplift and overturning: the geometric mean of the largest uplift
+    # threshold and the smallest overturning one (every scene rocks and survives it)
+    rock = lambda a_ot: math.sqrt(a_up * fin(a_ot)) if fin(a_ot) > a_up else a_up  # noqa: E731
     paper = campaign_plan(quick)
     hi = max(8.0, math.ceil(1.5 * fin(a10))) if math.isfinite(a10) else 8.0
     frac = [] if quick else [c for c in (_fracture_case(r, s) for r, s in zip(refs, loaded))
@@ -130,8 +136,8 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
     plan = dict(paper)
     plan.update({
         "scenes": tuple(refs),
-        "pulse_points": ((r2(0.5 * fin(a3)), 3.0),) if quick else
-        ((r2(0.5 * fin(a3)), 3.0), (r2(0.5 * fin(a4)), 4.0)),
+        "pulse_points": ((r2(rock(a3)), 3.0),) if quick else
+        ((r2(rock(a3)), 3.0), (r2(rock(a4)), 4.0)),
         "pulse_shapes": paper["pulse_shapes"] if quick else _SHAPES,
         "map_scene": first,
         "map_A": tuple(r2(f * fin(a3_0)) for f in ((0.7, 1.5) if quick

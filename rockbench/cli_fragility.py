@@ -42,7 +42,8 @@ def add_fragility_command(sub) -> None:
                    help="a built-in scene name (rockbench scenes) or a path to a .toml file")
     p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=_key_value,
                    action="append", default=[], help="override a scene parameter")
-    p.add_argument("--records", nargs="+", required=True, metavar="DIR|FILE|NAME",
+    p.add_argument("--records", nargs="+", action="extend", required=True,
+                   metavar="DIR|FILE|NAME",
                    help="record folders, record files, or a bundled ensemble name "
                         "(bundled, or a folder shipped under rockbench/records)")
     from .cli import add_engine_option, add_quiet_option, add_setting_option

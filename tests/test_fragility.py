@@ -356,3 +356,12 @@ def test_peaks_below_the_uplift_threshold_count_as_no_rocking():
     eng.loc[eng["scale"] == 0.2, "peak"] = 1.5e-5
     a = analyse(pd.concat([ref, eng]), n_boot=20)
     assert a["backends"]["engine"]["p_value"] == 1.0
+
+
+def test_records_option_repeats_like_engine():
+    """`--records A --records B C` keeps all three (the last one alone was kept before)."""
+    from rockbench.cli import build_parser
+
+    a = build_parser().parse_args(["fragility", "housner-block", "--records", "a",
+                                   "--records", "b", "c"])
+    assert a.records == ["a", "b", "c"]
