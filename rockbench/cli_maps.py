@@ -133,6 +133,25 @@ def _with_near_boundary(df, store: Path):
     return mark_near_boundary(df, scene, tail=None if tail == 10.0 else tail)
 
 
+def _same_structure(first: str, second: str) -> None:
+    """RockbenchError unless the two stores' ``_inputs.json`` name the same structure (its
+    parameters, the name and description aside): a map of one structure says nothing about
+    another's verdicts, even on the same (A, W) cells."""
+    from .errors import RockbenchError
+    from .sweep.map_store import read_inputs
+
+    scenes = []
+    for path in (first, second):
+        inputs = read_inputs(Path(path))
+        scene = inputs.get("scene") if isinstance(inputs, dict) else None
+        if isinstance(scene, dict):
+            scene = {k: v for k, v in scene.items() if k not in ("name", "description")}
+        scenes.append(scene)
+    if scenes[0] is not None and scenes[1] is not None and scenes[0] != scenes[1]:
+        raise RockbenchError(f"{first} and {second} are maps of different structures (their "
+                             "_inputs.json differ): --compare takes two maps of one scene")
+
+
 def cmd_map(args: argparse.Namespace) -> int:
     with _one_line_warnings():
         return _cmd_map(args)
@@ -144,6 +163,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
 
     figure = _figure_path(args.figure)
     if args.compare:
+        _same_structure(*args.compare)
         a, b = (load_map(x) for x in args.compare)
         a = _with_near_boundary(a, Path(args.compare[0]))
         ag = map_agreement(a, b)

@@ -295,3 +295,21 @@ def test_adaptive_map_reproduces_the_full_grid_simulating_a_third(tmp_path, caps
     again = run_map("paper-asymmetric", store=store, **kw)
     assert again.attrs["cells_run"] == ad.attrs["inferred"] and "inferred" not in again
     pd.testing.assert_frame_equal(again.drop(columns="wall_s"), full.drop(columns="wall_s"))
+
+
+def test_compare_refuses_maps_of_different_structures(tmp_path):
+    """Two maps of different structures are not compared, even on the same (A, W) cells."""
+    import subprocess
+    import sys
+
+    for scene, name in (("housner-block", "a"), ("paper-symmetric", "b")):
+        r = subprocess.run([sys.executable, "-m", "rockbench", "map", scene, "--engine",
+                            "analytic", "--grid", "2x2", "--amplitude", "1:4", "--frequency",
+                            "2:4", "--store", str(tmp_path / name), "--quiet"],
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr[-1000:]
+    r = subprocess.run([sys.executable, "-m", "rockbench", "map", "--compare",
+                        str(tmp_path / "a"), str(tmp_path / "b")], capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 2 and "different structures" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
