@@ -187,6 +187,14 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
                 raise MissingOption(opt, what, "with --pulse")
         pulse = RickerPulse.dimensionless(args.amplitude, args.frequency, scene.structure,
                                           args.pulse, 1 if args.sign is None else args.sign)
+        duration = getattr(args, "duration", None)
+        if duration is not None and pulse.t_start + float(duration) <= 0.0:
+            # the run starts 3 T_g before the pulse centre (t = 0): a shorter run ends before
+            # the pulse's main lobe and would report a structure that never moved
+            raise ParameterError("--duration", duration,
+                                 f"> {-pulse.t_start:.4g} s: the run starts at t = "
+                                 f"{pulse.t_start:.4g} s (3 T_g before the pulse centre) and "
+                                 "would end before the pulse's main lobe")
         return pulse, 0.0
 
     if args.record is not None:

@@ -552,3 +552,18 @@ def test_output_dt_follows_dt_in_python_as_on_the_command_line(capsys):
     assert d["settings"]["output_dt"] == 2e-3
     with pytest.raises(rb.ParameterError, match="output_dt"):
         rb.run(scene, None, engine="pymunk", phi0=0.05, duration=1, dt=2e-3, output_dt=1.5e-3)
+
+
+def test_a_pulse_run_that_ends_before_the_pulse_is_refused():
+    """A pulse run starts 3 T_g before the pulse centre: a --duration that ends before it is
+    refused in one line naming the shortest useful one, not run as a structure that never
+    moved."""
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "rockbench", "run", "paper-asymmetric",
+                        "--pulse", "antisymmetric", "--sign", "-1", "--amplitude", "4",
+                        "--frequency", "2", "--duration", "4"], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 2 and "--duration" in r.stderr and "pulse centre" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
