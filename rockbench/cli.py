@@ -477,20 +477,25 @@ def _pandas_display():
     return pd.option_context("display.width", 200, "display.max_columns", 50)
 
 
-def _print_constants(out: str | Path) -> None:
-    """Print the analytic constants of the campaign's scenes and write them to
-    ``out/constants.csv`` (the table ``rockbench info`` gives for one scene)."""
+def _print_constants(out: str | Path, scenes=None) -> None:
+    """Print the analytic constants of the campaign's scenes (``scenes``: a user's; default
+    the paper plan's) and write them to ``out/constants.csv`` (the table ``rockbench info``
+    gives for one scene)."""
     import pandas as pd
 
     from .analytic.reference import CONSTANTS
-    from .campaign import SCENES
     from .runner import info
     from .scene import load_scene
+
+    if Path(out).exists() and not Path(out).is_dir():
+        raise ParameterError("--out", str(out), "a folder (it is a file)")
+    if not scenes:
+        from .campaign import SCENES as scenes
 
     keys = ("alpha", "p", "lambda_ccw", "lambda_cw", "eta_ccw", "eta_cw", "phi_cr_ccw",
             "phi_cr_cw", "phi_fall_ccw", "phi_fall_cw", "phi_fracture_ccw", "phi_fracture_cw")
     cols = {"scene": "", **{k: CONSTANTS[k][0] for k in keys}}
-    rows = [info(load_scene(name)) for name in SCENES]
+    rows = [info(load_scene(name)) for name in scenes]
     table = pd.DataFrame(rows).reindex(columns=list(cols))
     print("Analytic constants of the campaign's scenes (critical angle: none = no zero of "
           "dV/dphi before the fall angle; fracture: none = no fracture):")
@@ -521,7 +526,18 @@ def cmd_report(args: argparse.Namespace) -> int:
         kwargs.update(executor="dask", dask_address=args.dask)
     if args.workers is not None:
         kwargs["workers"] = args.workers
-    _print_constants(args.out)
+    plan_scenes = list(args.scenes)
+    if args.plan is not None:
+        import tomllib
+
+        try:
+            data = tomllib.loads(Path(args.plan).read_text(encoding="utf-8"))
+            plan_scenes = list(data.get("campaign", data).get("scenes") or [])
+            plan_scenes = [str((Path(args.plan).parent / x).resolve())
+                           if str(x).endswith(".toml") else x for x in plan_scenes]
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, AttributeError):
+            plan_scenes = []        # the campaign reads the plan and names what is wrong
+    _print_constants(args.out, plan_scenes or None)
     path = campaign.run_campaign(args.out, **kwargs)
     print(f"report: {path}")
     return 0
