@@ -198,6 +198,17 @@ def _run_job_safe(job: dict[str, Any]) -> dict[str, Any]:
         return {"job": job, "error": f"{type(e).__name__}: {e}"}
 
 
+def _relative_cost(engine: str) -> float:
+    """The backend's ``relative_cost`` capability (1.0 for a backend that does not import)."""
+    from .engines import get_backend
+    from .errors import BackendUnavailable
+
+    try:
+        return float(get_backend(engine).relative_cost)
+    except BackendUnavailable:
+        return 1.0
+
+
 def _job_weight(job: Mapping[str, Any]) -> float:
     """Relative cost of a job: the longest run first keeps the pool balanced."""
     w = 1.0
@@ -205,7 +216,7 @@ def _job_weight(job: Mapping[str, Any]) -> float:
         w *= 2.5
     if job["kind"] == "dt":
         w *= 1e-3 / job["dt"]
-        w *= {"pybullet": 2.5}.get(job["engine"], 1.0)
+        w *= _relative_cost(job["engine"])
     return w
 
 
@@ -484,7 +495,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     from .report.maps_page import maps_html
 
     mp = plan["maps"]
-    g = mp["analytic_grid"]
+    g = (12, 12) if quick else mp["analytic_grid"]           # what run_maps ran
     sections["choice-section"] = ("Choosing a modelling approach",
                                   choice_html(choice, out / "figures", with_work_precision=False))
     sections["maps-section"] = (

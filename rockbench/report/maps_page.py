@@ -36,15 +36,16 @@ def maps_html(maps: Mapping[str, Any], figdir, *, analytic_grid: str, axes: str)
     for scene, df in maps["analytic"].items():
         parts.append(H.figure_html(
             plot_map_panels(df, title=f"{scene}: analytic overturning map"),
-            f"{scene}, analytic model (compiled path), {analytic_grid}: the paper's four "
-            f"panels (Figs. 4-7) on W = omega_g / p [-] and A = a_g / (g tan alpha) [-].",
+            f"{scene}, analytic model (compiled path), {analytic_grid}: the four panels of "
+            f"the paper's Figs. 4-7 (symmetric and antisymmetric pulses, both signs) on "
+            f"W = omega_g / p [-] and A = a_g / (g tan alpha) [-].",
             name=f"map_{scene}_analytic", png_dir=figdir))
     ag = maps.get("agreement")
     if ag is not None and len(ag):
         parts.append("<h3>Every engine against the analytic map</h3><ul>"
                      + "".join(f"<li>{H.escape(w)}</li>" for w in maps["words"]) + "</ul>")
         if maps.get("provenance"):
-            parts.append("<p>Where each engine map comes from (the 12 x 12 x 4 maps are "
+            parts.append("<p>Where each engine map comes from (the plan's measured grid is "
                          "measured by <code>rockbench report --full</code> and reused only when "
                          "sample cells re-run now reproduce them):</p><ul>"
                          + "".join(f"<li>{H.escape(w)}</li>" for w in maps["provenance"])
