@@ -146,7 +146,7 @@ def main(argv=None) -> int:
             print(lines[-1], flush=True)
     # MuJoCo: plain stepping against the batched rollout path, per map cell
     if "mujoco" in engines:
-        from rockbench.engines.mujoco import run_batch
+        from rockbench.engines.mujoco_batch import run_batch
 
         sc = rb.load_scene("paper-asymmetric")
         chunk = [rb.RickerPulse.dimensionless(A, W, sc.structure, shape, sign)

@@ -37,6 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import rockbench as rb  # noqa: E402
 from loop_overhead import _built  # noqa: E402
 from rockbench.engines import mujoco as M  # noqa: E402
+from rockbench.engines import mujoco_batch as MB  # noqa: E402
 from rockbench.engines.base import run_window  # noqa: E402
 from rockbench.sweep import runs  # noqa: E402
 from rockbench.sweep.cases import normalize_case  # noqa: E402
@@ -119,14 +120,14 @@ def after_plain(cases):
 
 def batched(cases, keep: str, stop: bool):
     def go():
-        saved = M.VERDICT_CHUNK
+        saved = MB.VERDICT_CHUNK
         if not stop:                          # one rollout call to the end of the window
-            M.VERDICT_CHUNK = 10 ** 9
+            MB.VERDICT_CHUNK = 10 ** 9
             runs._SCENES.clear()
         try:
             runs.run_batch_cases(cases, nthread=1, keep=keep)
         finally:
-            M.VERDICT_CHUNK = saved
+            MB.VERDICT_CHUNK = saved
     return go
 
 

@@ -55,8 +55,18 @@ MEASURED_GRID = _P["measured_grid"]
 #: Grid per (engine speed class, scene) computed by the default report when no verified
 #: measured map exists (``make report`` stays within its 10-minute budget on 2 cores).
 ENGINE_GRIDS = {"fast": dict(_P["fast_grids"]), "slow": {}}
-#: Engines fast enough for the larger default grids (real-time factor >= 20 through rockbench).
-FAST_ENGINES = ("pymunk", "mujoco")
+
+
+def is_fast(engine: str) -> bool:
+    """The engine is fast enough for the larger default grids: its backend's ``fast``
+    capability (real-time factor >= 20 through rockbench, ``rockbench.engines.base``)."""
+    from .engines import get_backend
+    from .errors import BackendUnavailable
+
+    try:
+        return bool(get_backend(engine).fast)
+    except BackendUnavailable:
+        return False
 
 
 def scene_label(ref: Any) -> str:
@@ -98,7 +108,7 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
                 shutil.rmtree(path)
             df = run_map(sc, eng, store=path, keyed_by_code=False, **cells, **run)
             return df, mg, f"measured now ({why})"
-    g = maps["fast_grids"].get(lab) if eng in FAST_ENGINES else None
+    g = maps["fast_grids"].get(lab) if is_fast(eng) else None
     if g is None:
         return None, (0, 0), why
     g = tuple(g)

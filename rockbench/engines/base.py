@@ -11,6 +11,21 @@ A backend is a subclass of :class:`Backend` registered by name in :mod:`rockbenc
   ``__post_init__``. A backend never changes the scene: engine-only parameters live here;
 * ``package`` - the distribution that provides the engine (class attribute; default the
   registry name, e.g. "openseespy" for "opensees"), for ``rockbench engines``;
+* capabilities (class attributes with defaults on :class:`Backend`, read by sweeps and
+  campaigns through ``rockbench.engines.get_backend(name)``, so that no module outside
+  ``engines/`` names an engine):
+
+  - ``batched`` (default False) - the backend runs many ground motions of one scene in one
+    call: it then implements the classmethods ``run_batch(scene, motions, *, duration,
+    nthread, keep, **settings) -> list[Result]`` and ``batch_refusal(scene, settings) -> str |
+    None`` (why a scene cannot run batched; callers then use ``run`` case by case);
+  - ``fast`` (default False) - real-time factor >= 20 through rockbench on the benchmark cases
+    (``benchmarks/results/results.md``): the report gives such engines the larger default map
+    grids;
+  - ``relative_cost`` (default 1.0) - CPU cost of a run relative to the fast engines, for the
+    order in which campaigns schedule jobs (longest first); from the ``total_s`` column of
+    ``benchmarks/results/results.md``;
+
 * ``available()`` - classmethod returning ``(True, version)`` or ``(False, why)`` without
   raising when the engine package is missing;
 * ``run(motion=None, *, duration=None, phi0=0.0) -> Result`` - one simulation of the scene it
@@ -86,6 +101,10 @@ class Backend(abc.ABC):
 
     name: ClassVar[str]
     Settings: ClassVar[type]
+    #: Capabilities (module docstring): batched runs, speed class, relative cost of a run.
+    batched: ClassVar[bool] = False
+    fast: ClassVar[bool] = False
+    relative_cost: ClassVar[float] = 1.0
 
     def __init__(self, scene: Scene, settings: Any = None, **overrides: Any):
         if not isinstance(scene, Scene):
@@ -108,6 +127,17 @@ class Backend(abc.ABC):
     @abc.abstractmethod
     def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
         """Simulate the scene under ``motion`` (None: free rocking from ``phi0`` [rad])."""
+
+    @classmethod
+    def batch_refusal(cls, scene: Scene, settings: Any) -> str | None:
+        """Why :meth:`run_batch` cannot run ``scene`` (None: it can); a backend that is not
+        ``batched`` refuses every scene."""
+        return None if cls.batched else f"backend {cls.name!r} has no batched path"
+
+    @classmethod
+    def run_batch(cls, scene: Scene, motions, **kwargs: Any) -> list[Result]:
+        """Many ground motions of ``scene`` in one call (``batched`` backends only)."""
+        raise ParameterError("engine", cls.name, "a backend with batched runs (batched=True)")
 
     @classmethod
     def version(cls) -> str:

@@ -171,6 +171,9 @@ class PybulletBackend(EngineBackend):
 
     name: ClassVar[str] = "pybullet"
     Settings: ClassVar[type] = PybulletSettings
+    # a run's total_s is 1.7-3.8 x MuJoCo's and 1.9-3.6 x pymunk's on the four benchmark cases
+    # (benchmarks/results/results.md, 2026-11-22); real-time factor 7-48, not ``fast``
+    relative_cost: ClassVar[float] = 2.5
 
     @classmethod
     def available(cls) -> tuple[bool, str]:

@@ -90,6 +90,7 @@ class PymunkBackend(EngineBackend):
 
     name: ClassVar[str] = "pymunk"
     Settings: ClassVar[type] = PymunkSettings
+    fast: ClassVar[bool] = True     # real-time factor 44-341 (benchmarks/results/results.md)
 
     @classmethod
     def available(cls) -> tuple[bool, str]:

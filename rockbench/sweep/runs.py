@@ -136,37 +136,53 @@ def _run_normalized(norm: dict[str, Any], keep: str = "all") -> dict[str, Any]:
     return run_case(norm) if keep == "all" else run_case(norm, keep=keep)
 
 
-#: MuJoCo cases run together in one ``mujoco.rollout`` call (one executor item).
+#: Cases of a batched backend (``batched`` capability, e.g. MuJoCo's ``mujoco.rollout``) run
+#: together in one ``run_batch`` call (one executor item).
 BATCH_SIZE = 16
 
 
+def _batched(engine: str) -> bool:
+    """The backend ``engine`` declares batched runs (its class attribute ``batched``; reading
+    it imports the adapter module, never the engine)."""
+    from ..engines import get_backend
+    from ..errors import BackendUnavailable
+
+    try:
+        return bool(get_backend(engine).batched)
+    except BackendUnavailable:
+        return False
+
+
 def _batch_key(norm: dict[str, Any]) -> str | None:
-    """The group of a case that the batched MuJoCo path can run with others (same scene,
-    overrides, settings and duration, from rest under a ground motion), or None."""
-    if norm["engine"] != "mujoco" or norm["motion"] is None or norm["phi0"] != 0.0:
+    """The group of a case that a batched backend (``batched``) can run with others (same
+    engine, scene, overrides, settings and duration, from rest under a ground motion), or
+    None."""
+    if norm["motion"] is None or norm["phi0"] != 0.0 or not _batched(norm["engine"]):
         return None
-    return json.dumps([norm["scene"], norm["overrides"], norm["settings"], norm["duration"]],
+    return json.dumps([norm["engine"], norm["scene"], norm["overrides"], norm["settings"], norm["duration"]],
                       sort_keys=True)
 
 
 def run_batch_cases(norms: list[dict[str, Any]], nthread: int | None = 1,
                     keep: str = "all") -> list[dict]:
-    """Rows of MuJoCo cases of one batch group (:func:`_batch_key`) run together by
-    :func:`rockbench.engines.mujoco.run_batch`; a scene the batched path refuses (dampers,
-    fracture) falls back to :func:`run_case` one by one. ``run_s`` of each row is its share
-    of the batch."""
-    from ..engines.mujoco import MujocoBackend, batch_refusal, run_batch
+    """Rows of the cases of one batch group (:func:`_batch_key`: one batched backend, scene
+    and settings) run together by the backend's ``run_batch`` (e.g.
+    :func:`rockbench.engines.mujoco_batch.run_batch`); a scene its ``batch_refusal`` refuses
+    (dampers, fracture) falls back to :func:`run_case` one by one. ``run_s`` of each row is its
+    share of the batch."""
+    from ..engines import get_backend
     from ..scene.motion import motion_from_spec
 
     t = time.perf_counter()
     first = norms[0]
     try:
+        backend = get_backend(first["engine"])
         scene = _case_scene(first)
-        why = batch_refusal(scene, MujocoBackend(scene, **first["settings"]).settings)
+        why = backend.batch_refusal(scene, backend(scene, **first["settings"]).settings)
         if why is not None:
             return [_run_normalized(n, keep) for n in norms]
         motions = [motion_from_spec(n["motion"], scene.structure) for n in norms]
-        results = run_batch(scene, motions, duration=first["duration"], nthread=nthread,
+        results = backend.run_batch(scene, motions, duration=first["duration"], nthread=nthread,
                             keep=keep, **first["settings"])
     except Exception:  # anything the batch cannot do: the plain path, case by case
         return [_run_normalized(n, keep) for n in norms]
@@ -336,7 +352,7 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
 
     execute(_run_item, items, on_result=on_item, crashed=crashed,
             label=lambda item: (case_label(item[1]) if item[0] == "case"
-                                else f"{len(item[1])} mujoco cases (batched)"),
+                                else f"{len(item[1])} {item[1][0]['engine']} cases (batched)"),
             is_error=lambda out: (isinstance(out, dict) and out.get("status") == "error"),
             executor=executor, workers=workers, dask_address=dask_address, progress=progress,
             desc="sweep", unit="item")

@@ -116,7 +116,7 @@ def _mujoco_chunk():
 
 
 def test_batched_mujoco_stops_at_the_verdict_with_unchanged_results():
-    from rockbench.engines import mujoco as M
+    from rockbench.engines import mujoco_batch as M
 
     scene, motions = _mujoco_chunk()
     duration = motions[0].t_end - motions[0].t_start + 3.0

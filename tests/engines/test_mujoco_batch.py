@@ -26,7 +26,7 @@ def _pulses(scene, points):
 
 @pytest.mark.parametrize("name", ["paper-asymmetric", "housner-block"])
 def test_batched_equals_plain(name):
-    from rockbench.engines.mujoco import run_batch
+    from rockbench.engines.mujoco_batch import run_batch
 
     scene = rb.load_scene(name)
     motions = _pulses(scene, [(2.0, 3.0, "symmetric", 1), (4.0, 3.0, "antisymmetric", -1),
@@ -50,7 +50,7 @@ def test_batched_equals_plain(name):
 
 
 def test_batched_refuses_dampers_and_fracture_and_sweeps_fall_back(tmp_path):
-    from rockbench.engines.mujoco import run_batch
+    from rockbench.engines.mujoco_batch import run_batch
     from rockbench.sweep import run_cases
 
     scene = rb.load_scene("paper-asymmetric-hybrid-eps1")
