@@ -45,7 +45,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only
 
 __all__ = ["REFERENCE", "METRIC_COLUMNS", "ETA_COLUMNS", "DERIVED_COLUMNS", "TOLERANCES",
            "TOLERANCE_KEYS", "Comparison", "compare", "metrics", "eta_rows", "history_error",
-           "with_derived", "overturn_map"]
+           "with_derived", "overturn_map", "peak_of"]
 
 
 def __getattr__(name: str) -> Any:
@@ -245,7 +245,7 @@ def history_error(result: Result, reference: Result) -> tuple[np.ndarray, np.nda
     return grid, (phi - phi_ref) / reference.scene.alpha
 
 
-def _peak(result: Result) -> tuple[float, float]:
+def peak_of(result: Result) -> tuple[float, float]:
     """(max |phi| [rad], time of it [s]) of a result's history."""
     h = result.history
     if len(h) == 0:
@@ -339,8 +339,8 @@ def metrics(result: Result, reference: Result) -> dict[str, Any]:
         return row
     s, sr = result.summary, reference.summary
     row["max_abs_phi_over_alpha"] = float(s.max_abs_phi_over_alpha)
-    peak, _ = _peak(result)
-    peak_ref, _ = _peak(reference)
+    peak, _ = peak_of(result)
+    peak_ref, _ = peak_of(reference)
     row["peak_rel_error"] = peak / peak_ref - 1.0 if peak_ref > 0 else math.nan
     _, err = history_error(result, reference)
     if err.size:

@@ -125,7 +125,7 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
     (first sample of phi); otherwise ``ParameterError`` says what differs.
     """
     __tracebackhide__ = True  # a failure points at the caller's line, not at this function
-    from ..compare import _peak, eta_rows, history_error, metrics
+    from ..compare import eta_rows, history_error, metrics, peak_of
     from ..result import Result, motion_label
 
     for nm, r in (("result", result), ("reference", reference)):
@@ -154,7 +154,7 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
             raise ParameterError("band", band.scene,
                                  f"the band of this case's scene {result.scene.name!r}")
         n_checks += 1
-        pk, t_pk = _peak(result)
+        pk, t_pk = peak_of(result)
         j = band.judge(pk / alpha)
         if not j.inside:
             failures.append(
@@ -163,8 +163,8 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
                 f"(unperturbed {band.nominal:.4g}): {j.text}")
     elif peak_rtol is not None:
         n_checks += 1
-        pk, t_pk = _peak(result)
-        pr, t_pr = _peak(reference)
+        pk, t_pk = peak_of(result)
+        pr, t_pr = peak_of(reference)
         if pr > 0:
             err = pk / pr - 1.0
             if abs(err) > peak_rtol:
