@@ -535,7 +535,7 @@ def test_engine_option_repeatable_and_comma_lists_are_one_option(capsys, monkeyp
     seen = {}
     monkeypatch.setattr(campaign, "run_campaign",
                         lambda out_dir="reports", **kw: seen.update(kw) or Path(out_dir))
-    monkeypatch.setattr("rockbench.cli._print_constants", lambda out: None)
+    monkeypatch.setattr("rockbench.cli._print_constants", lambda out, scenes=None: None)
     assert main(["report", "--engine", "pymunk", "--engines", "mujoco,pymunk"]) == 0
     assert seen["engines"] == ["pymunk", "mujoco"]
 
