@@ -27,6 +27,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
+
+from .legibility import wrap_at
 from matplotlib.lines import Line2D
 
 from ..compare import TOLERANCES
@@ -323,7 +325,7 @@ def plot_eta(eta: pd.DataFrame, *, title: str | None = None) -> Figure:
                          color=engine_color(name))
         if math.isfinite(ref):
             axm.axhline(ref, color="k", ls="--", lw=1.2)
-        axm.set_xticks(range(len(backends)), backends, rotation=30, fontsize=8)
+        axm.set_xticks(range(len(backends)), backends, rotation=90, fontsize=8)
         axm.set_ylabel("eta mean +- std [-]")
         axm.set_xlabel("backend")
         axm.set_xlim(-0.6, max(len(backends), 1) - 0.4)
@@ -369,7 +371,7 @@ def plot_eta_summary(summary: pd.DataFrame, *, title: str | None = None) -> Figu
         ax.grid(True, lw=0.3, alpha=0.5)
         if engines:
             ax.legend(fontsize=8, loc="best")
-    axes[-1].set_xticks(range(len(scenes)), scenes, rotation=20, fontsize=8, ha="right")
+    axes[-1].set_xticks(range(len(scenes)), [wrap_at(str(x), "-", 12) for x in scenes], fontsize=8)
     axes[-1].set_xlabel("scene (free rocking)")
     if title:
         fig.suptitle(title, fontsize=10)
@@ -398,20 +400,6 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def _wrap_label(text: str, width: int = 11) -> str:
-    """Column label broken at underscores into lines of about ``width`` characters."""
-    lines, cur = [], ""
-    for part in str(text).split("_"):
-        piece = part if not cur else "_" + part
-        if cur and len(cur) + len(piece) > width:
-            lines.append(cur + "_")
-            cur = part
-        else:
-            cur += piece
-    lines.append(cur)
-    return "\n".join(lines)
-
-
 def plot_summary_table(table: pd.DataFrame, columns: Sequence[str] | None = None, *,
                        grade_as: Mapping[str, str] | None = None,
                        title: str | None = None) -> Figure:
@@ -438,7 +426,7 @@ def plot_summary_table(table: pd.DataFrame, columns: Sequence[str] | None = None
     ax.axis("off")
     if cells:
         tb = ax.table(cellText=cells, cellColours=colours,
-                      colLabels=[_wrap_label(c) for c in columns], bbox=[0, 0, 1, 1],
+                      colLabels=[wrap_at(c, "_", 11) for c in columns], bbox=[0, 0, 1, 1],
                       cellLoc="center")
         tb.auto_set_font_size(False)
         tb.set_fontsize(8)

@@ -216,7 +216,7 @@ def fragility_html(section: Mapping[str, Any], figdir=None) -> str:
             "each backend; the percentage overturned above each group. The Kolmogorov-Smirnov "
             "test compares these distributions (overturned runs ranked above every survivor).",
             name=f"fragility_peaks_{i}", png_dir=figdir))
-        parts.append(H.html_table(fragility_table(a), graded=False))
+        parts.append(H.html_table(fragility_table(a), graded=False, scroll=True))
     if section.get("fig9"):
         parts.append(H.figure_html(
             plot_fig9({f["label"]: f["runs"] for f in section["frames"]},

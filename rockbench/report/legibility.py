@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.text import Text
 
 __all__ = ["MIN_TEXT_PX", "PAGE_PX", "display_scale", "text_px", "make_legible",
-           "overlapping_texts"]
+           "overlapping_texts", "wrap_at"]
 
 #: Smallest text on screen [px] in a 1400 px window.
 MIN_TEXT_PX = 11.0
@@ -88,3 +88,19 @@ def overlapping_texts(fig: Figure, *, tolerance_px: float = 1.0) -> list[tuple[s
         for i, (a, ba) in enumerate(labels):
             pairs += [(a, b) for b, bb in ticks + labels[i + 1:] if clash(ba, bb)]
     return pairs
+
+
+def wrap_at(text: str, sep: str, width: int) -> str:
+    """``text`` broken after each ``sep`` into lines of about ``width`` characters: tick and
+    column labels that stay apart without rotation (``"paper-asymmetric-hybrid-eps2"`` ->
+    ``"paper-\\nasymmetric-\\nhybrid-eps2"`` with "-" and 12)."""
+    lines, line = [], ""
+    for part in str(text).split(sep):
+        piece = part if not line else sep + part
+        if line and len(line) + len(piece) > width:
+            lines.append(line + sep)
+            line = part
+        else:
+            line += piece
+    lines.append(line)
+    return "\n".join(lines)
