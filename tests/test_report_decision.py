@@ -75,7 +75,7 @@ def test_decision_table_one_row_per_engine_with_percentages():
     assert row["within 2 %"].startswith("dt=0.0005: 0.0135 CPU s/s, worst 1.68 %")
     assert row["within 0.2 %"] == "not reached (best 1.38 %)"
     assert row["map agreement"] == "99.8 %, kappa 0.996"
-    assert row["free-rocking eta error (worst)"] == "0.21 %"
+    assert row["free-rocking eta error (worst, every scene)"] == "0.21 %"
     assert row["breaks first at"] == "dt 0.01 (off)"
     assert t.set_index("engine").loc["mujoco", "breaks first at"] == "nowhere tried"
 

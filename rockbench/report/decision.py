@@ -162,10 +162,12 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
             if len(a):
                 row["map agreement"] = (f"{pct(a['agree_fraction'].astype(float).min(), 1)}, "
                                         f"kappa {a['kappa'].astype(float).min():.3f}")
+            else:
+                row["map agreement"] = "no map (report --full measures it)"
         if eta_summary is not None and len(eta_summary):
             s = eta_summary[(eta_summary["backend"] == e)]["rel_error"].astype(float).abs()
             if len(s.dropna()):
-                row["free-rocking eta error (worst)"] = pct(s.max())
+                row["free-rocking eta error (worst, every scene)"] = pct(s.max())
         w = _where_it_breaks(breaks, e)
         if w:
             row["breaks first at"] = w
