@@ -491,7 +491,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                                fingerprint=fingerprint, engine_versions=_engine_versions(),
                                files=list(files))
     from .report.choice_page import choice_html, work_precision_html
-    from .report.decision import decision_html
+    from .report.decision import decision_html, evidence_note
     from .report.maps_page import maps_html
 
     mp = plan["maps"]
@@ -515,6 +515,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     sections["decision-section"] = ("Which engine and settings", decision_html(
         choice["advice"], scene=scene_word, structure=plan.get("description", ""),
         agreement=maps["agreement"], eta_summary=eta_summary, breaks=choice.get("breaks"),
+        notes=[n for n in [evidence_note(choice.get("tradeoff"), full=full)] if n],
         work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
     timings["report"] = time.perf_counter() - t
     total = time.perf_counter() - t_start

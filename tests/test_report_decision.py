@@ -126,3 +126,14 @@ def test_overlap_detector_finds_overlapping_labels():
     ax2 = fig2.subplots()
     ax2.plot([0, 1], [0, 1])
     assert overlapping_texts(fig2) == []
+
+
+def test_the_evidence_is_named_with_its_size():
+    from rockbench.report.decision import evidence_note
+
+    t = pd.DataFrame({"n_choice": [6, 6], "n_heldout": [6, 5]})
+    text = evidence_note(t, full=False)
+    assert "quick set" in text and "6 to choose on and 6 held out" in text
+    assert "default evidence" in text
+    assert "default set" in evidence_note(t, full=True)
+    assert evidence_note(pd.DataFrame(), full=False) == ""

@@ -18,7 +18,7 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
-__all__ = ["decision_sentences", "decision_table", "decision_html", "pct"]
+__all__ = ["decision_sentences", "decision_table", "decision_html", "evidence_note", "pct"]
 
 #: Advice statuses of a setting within the tolerance on the chosen cases that is not
 #: recommended, and why (rockbench.advise.decide).
@@ -175,11 +175,27 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
     return pd.DataFrame(rows)
 
 
+def evidence_note(tradeoff: pd.DataFrame | None, *, full: bool) -> str:
+    """What the decision rests on: how many cases were chosen on and held out (columns
+    n_choice, n_heldout of the work-precision table), and what a larger set is."""
+    if tradeoff is None or not len(tradeoff) or "n_choice" not in tradeoff:
+        return ""
+    nc, nh = int(tradeoff["n_choice"].max()), int(tradeoff["n_heldout"].max())
+    size = "default" if full else "quick"
+    more = ("" if full else " `rockbench advise SCENE` chooses on the default evidence and "
+            "`--full` on the full one: a setting confirmed here can still fail there (a "
+            "small-uplift record is the usual culprit, docs/choosing.md).")
+    return (f"Evidence: the {size} set of the scene's own cases, {nc} to choose on and {nh} "
+            f"held out to confirm (free rocking, pulses near and away from the boundary, "
+            f"records).{more}")
+
+
 def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
                   agreement: pd.DataFrame | None = None,
                   eta_summary: pd.DataFrame | None = None, breaks: pd.DataFrame | None = None,
                   work_precision_html: str = "", notes: Sequence[str] = ()) -> str:
-    """The decision section: sentences, the per-engine table, the work-precision figure."""
+    """The decision section: sentences, the per-engine table, the work-precision figure;
+    ``notes``: lines under the table (e.g. :func:`evidence_note`)."""
     lead = decision_sentences(advice, scene)
     parts = ['<div id="decision">']
     if structure:
