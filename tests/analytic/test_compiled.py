@@ -417,19 +417,25 @@ def test_compiled_equation_of_motion_matches_dynamics(name, kind):
     assert worst <= 1e-12
 
 
-def test_kept_step_does_not_step_over_an_excursion():
-    """The step size is kept across impacts, the first step after one at most |phi'/phi''|:
-    without that bound a kept step jumped over two short excursions of this cell (found on the
-    floor benchmark: 29 impacts and a peak 1 % low instead of 31)."""
-    cell = ("antisymmetric", 1, 3.757575757575758, 3.6666666666666665)
-    m = RickerPulse.dimensionless(cell[2], cell[3], SYM.structure, cell[0], cell[1])
-    ref = simulate(SYM, m, settings=AnalyticSettings(history="minimal", method="DOP853"))
-    assert_decided_with_margin(ref, SYM)
-    row = run_pulse_grid(SYM, [cell]).iloc[0]
-    assert row["n_impacts"] == ref.summary.n_impacts == 31
+@pytest.mark.parametrize("scene, cell, n", [
+    (SYM, ("antisymmetric", 1, 3.757575757575758, 3.6666666666666665), 31),
+    (EPS1, ("antisymmetric", -1, 4.538461538461538, 5.615384615384615), 77)],
+    ids=["symmetric", "hybrid-eps1"])
+def test_no_step_over_a_short_excursion_after_an_impact(scene, cell, n):
+    """After an impact the segment starts from scipy's initial step, as the reference does: a
+    step kept across impacts jumped over two short excursions of these cells (the symmetric one
+    found on the floor benchmark: 29 impacts instead of 31; the hybrid one by the slow 40 x 40
+    test, even with the first step capped at |phi'/phi''|: 75 instead of 77, peak 2.7 % low)."""
+    m = RickerPulse.dimensionless(cell[2], cell[3], scene.structure, cell[0], cell[1])
+    ref = simulate(scene, m, settings=AnalyticSettings(history="minimal", method="DOP853"))
+    row = run_pulse_grid(scene, [cell]).iloc[0]
+    assert ref.summary.n_impacts == n
     assert row["max_abs_phi_over_alpha"] == pytest.approx(ref.summary.max_abs_phi_over_alpha,
                                                           abs=PHI_TOL)
-    assert_same_run(simulate_compiled(SYM, m, settings=MINIMAL), ref, SYM)
+    if scene is SYM:
+        assert_decided_with_margin(ref, scene)
+        assert row["n_impacts"] == n
+        assert_same_run(simulate_compiled(scene, m, settings=MINIMAL), ref, scene)
 
 
 # --- the rules are mirrored, and read when a run starts ------------------------------------------
