@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import datetime as _dt
 import os
-import platform
 import time
 from pathlib import Path
 
@@ -27,14 +26,9 @@ import rockbench as rb
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+from run import cpu_name  # noqa: E402  (benchmarks/ is on sys.path when run)
+
+_cpu_name = cpu_name   # one reader of the processor's name: benchmarks/run.py
 
 
 def engine_run(scene, engine: str, steps: int, dt: float = 1e-4) -> tuple[float, rb.Result]:

@@ -27,7 +27,8 @@ from rockbench.scene.motion import motion_from_spec
 from rockbench.sweep.cases import catalogue
 
 
-def _cpu() -> str:
+def cpu_name() -> str:
+    """The processor's model name (/proc/cpuinfo), for the benchmarks' machine lines."""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.startswith("model name"):
@@ -39,7 +40,7 @@ def _cpu() -> str:
 
 def machine() -> dict:
     return {"date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-            "cpu": _cpu(), "cores": os.cpu_count(), "python": sys.version.split()[0],
+            "cpu": cpu_name(), "cores": os.cpu_count(), "python": sys.version.split()[0],
             "platform": platform.platform(), "rockbench": rb.__version__,
             "engines": "; ".join(f"{r['name']}: {r.get('version', r.get('reason'))}"
                                  for r in rb.engine_info())}

@@ -37,14 +37,9 @@ PYMUNK = ["run", "housner-block", "--engine", "pymunk", "--phi0-alpha", "0.3", "
           "1", "--json"]
 
 
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+from run import cpu_name  # noqa: E402  (benchmarks/ is on sys.path when run)
+
+_cpu = cpu_name   # one reader of the processor's name: benchmarks/run.py
 
 
 def child_cpu(argv: list[str], env: dict, cwd: Path) -> float:
