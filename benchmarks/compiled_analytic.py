@@ -109,11 +109,11 @@ def chunk_rate(scene, cells, repeat_ref, repeat_fast):
 def engine_chunk_lines(quick: bool) -> list[str]:
     """Cells per CPU second of each backend at its default settings on 16 cells of the
     report's engine map (paper-asymmetric, A 1..8, W 1..10, pulse window + 3 s), through the
-    path maps use (:func:`rockbench.maps._engine_rows`: MuJoCo batched in rollout), in this
+    path maps use (:func:`rockbench.studies.maps._engine_rows`: MuJoCo batched in rollout), in this
     process; the analytic model's compiled path on the same cells for scale."""
     import rockbench as rb
-    from rockbench.campaign_maps import ENGINE_AXES
-    from rockbench.maps import _engine_rows, map_cells
+    from rockbench.campaign.maps import ENGINE_AXES
+    from rockbench.studies.maps import _engine_rows, map_cells
 
     cells = map_cells(grid=(12, 12), amplitude=ENGINE_AXES["amplitude"],
                       frequency=ENGINE_AXES["frequency"])
@@ -132,7 +132,7 @@ def engine_chunk_lines(quick: bool) -> list[str]:
                 by_w = {}
                 for c in chunk:
                     by_w.setdefault(c[3], []).append(c)
-                from rockbench.maps import _duration
+                from rockbench.studies.maps import _duration
                 for w, cs in by_w.items():
                     run_pulse_grid(scene, cs, duration=_duration(scene, w, ENGINE_AXES["tail"]))
         else:

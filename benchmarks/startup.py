@@ -56,7 +56,10 @@ def cli_argv(src: Path, args: list[str], phi0_alpha: bool) -> list[str]:
     """``python -c`` running rockbench's CLI from the sources in ``src``."""
     if not phi0_alpha:   # older sources: --phi0 meant multiples of alpha
         args = ["--phi0" if a == "--phi0-alpha" else a for a in args]
-    code = ("import sys; sys.path.insert(0, sys.argv[1]); from rockbench.cli import main; "
+    code = ("import sys; sys.path.insert(0, sys.argv[1])\n"
+            "try:\n    from rockbench.cli.main import main\n"
+            "except ImportError:   # sources before the cli/ package\n"
+            "    from rockbench.cli import main\n"
             "raise SystemExit(main(sys.argv[2:]))")
     return [sys.executable, "-c", code, str(src), *args]
 
@@ -66,7 +69,9 @@ def measure(src: Path, repeat: int, work: Path) -> dict[str, list[float]]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
     cache = work / "jit-cache"
     env["ROCKBENCH_CACHE_DIR"] = str(cache)
-    phi0_alpha = "phi0-alpha" in (src / "rockbench" / "cli.py").read_text()
+    cli = src / "rockbench" / "cli"
+    phi0_alpha = "phi0-alpha" in ((cli / "common.py") if cli.is_dir()
+                                  else cli.with_suffix(".py")).read_text()
     out: dict[str, list[float]] = {}
 
     def clear_cache() -> None:

@@ -6,7 +6,7 @@ scripts, tests and worker processes); a notebook displays it, ``fig.savefig(path
 * :func:`plot_history` - rotation histories phi / alpha [-] against t [s] of one or more
   :class:`~rockbench.result.Result` of the same case (the analytic reference bold, black), with
   the ground acceleration [m/s^2] and the difference to the reference;
-* :func:`plot_map` - an overturning map (the frame of ``rockbench.maps.run_map`` or a map
+* :func:`plot_map` - an overturning map (the frame of ``rockbench.studies.maps.run_map`` or a map
   store) on W = omega_g / p and A = a_g / (g tan alpha), or an engine's verdicts over the analytic
   map with ``compare=``;
 * :func:`plot_work_precision` - error against CPU cost per simulated second, one curve per
@@ -66,7 +66,7 @@ _MAP_COLUMNS = ("pulse", "sign", "amplitude", "frequency", "overturned", "max_ab
 
 def _check_map(frame: Any, name: str) -> pd.DataFrame:
     if not isinstance(frame, pd.DataFrame):
-        raise ParameterError(name, type(frame).__name__, "a map frame (rockbench.maps.run_map)")
+        raise ParameterError(name, type(frame).__name__, "a map frame (rockbench.studies.maps.run_map)")
     missing = [c for c in _MAP_COLUMNS if c not in frame.columns]
     if missing:
         raise ParameterError(name, f"a frame without {', '.join(missing)}",
@@ -100,14 +100,14 @@ def plot_map(frame: pd.DataFrame, *, compare: pd.DataFrame | None = None,
 
 def plot_work_precision(table: pd.DataFrame, *, tolerance: float | None = None,
                         title: str | None = None) -> Figure:
-    """Work-precision diagram of a ``rockbench tradeoff`` table (``rockbench.tradeoff.tradeoff``):
+    """Work-precision diagram of a ``rockbench tradeoff`` table (``rockbench.studies.tradeoff.tradeoff``):
     worst error [-] against process CPU s per simulated s (log-log), one curve per engine through
     its settings, the Pareto front marked, and ``tolerance`` [-] as a horizontal line."""
     from .report.tradeoff_figures import plot_work_precision as _plot
 
     if not isinstance(table, pd.DataFrame):
         raise ParameterError("table", type(table).__name__,
-                             "a work-precision table (rockbench.tradeoff.tradeoff)")
+                             "a work-precision table (rockbench.studies.tradeoff.tradeoff)")
     need = {"engine", "dt", "cpu_per_sim_s", "worst_error"}
     if not need <= set(table.columns):
         raise ParameterError("table", "a frame without " + ", ".join(sorted(need - set(

@@ -99,19 +99,27 @@ EVENT_KINDS = ("uplift", "impact", "peak", "critical", "fracture", "overturn", "
 STATUSES = ("ok", "diverged", "invalid")
 
 
-def _jsonable(x: Any) -> Any:
+def jsonable(x: Any) -> Any:
+    """``x`` in plain JSON types (the one converter of results, tables and CLI output):
+    mappings with string keys, lists, bool, int, float, str, None; non-finite floats, pandas'
+    NA and NaT become null, paths and other objects their text."""
     if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        x = float(x)
-        return x if math.isfinite(x) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, (bool, np.bool_)):
         return bool(x)
-    return x
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    if x is None or isinstance(x, str):
+        return x
+    import sys
+    pd = sys.modules.get("pandas")                # NA / NaT only exist if pandas is loaded
+    if pd is not None and (x is pd.NA or x is pd.NaT):
+        return None
+    return str(x)
 
 
 @dataclass
@@ -137,7 +145,7 @@ class Summary:
     contact_opened: bool | None = None    # engines: a contact the analytic model keeps closed opened
 
     def to_dict(self) -> dict[str, Any]:
-        return _jsonable(asdict(self))
+        return jsonable(asdict(self))
 
     def to_frame(self) -> pd.DataFrame:
         """The summary as a frame indexed by field, with columns ``value``, ``unit`` and
@@ -228,7 +236,7 @@ class Cost:
         d = asdict(self)
         d["real_time_factor"] = self.real_time_factor
         d["cpu_real_time_factor"] = self.cpu_real_time_factor
-        return _jsonable(d)
+        return jsonable(d)
 
     def to_frame(self) -> pd.DataFrame:
         """The cost as a frame indexed by field, with ``value``, ``unit``, ``meaning``
@@ -271,8 +279,8 @@ class Result:
         d = {"backend": self.backend, "scene": getattr(self.scene, "name", None)}
         d.update(self.summary.to_dict())
         d.update(self.cost.to_dict())
-        d["motion"] = _jsonable(self.motion)
-        d["settings"] = _jsonable(self.settings)
+        d["motion"] = jsonable(self.motion)
+        d["settings"] = jsonable(self.settings)
         return d
 
     def dumps(self) -> str:

@@ -8,8 +8,8 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench import advise as A
-from rockbench import tradeoff as T
+from rockbench.studies import advise as A
+from rockbench.studies import tradeoff as T
 
 
 def _table():
@@ -126,7 +126,7 @@ def _fake_tradeoff(err_choice, err_held, calls):
 
 
 def _cases():
-    from rockbench.validation import ValidationCase
+    from rockbench.studies.validation import ValidationCase
     return [ValidationCase("free", f"free{i}", None, 0.01, 1.0, part=p, group="free")
             for i, p in enumerate(["choice", "held-out", "choice", "held-out"])]
 
@@ -165,7 +165,7 @@ def test_advise_refuses_when_held_out_fails(monkeypatch):
 def test_json_settings_round_trip_to_run_and_the_cli_grammar():
     """The advice's settings mapping is what rb.run(**settings) and `rockbench run --setting
     KEY=VALUE` take, as it is."""
-    from rockbench.cli_input import engine_settings
+    from rockbench.cli.common import engine_settings
 
     settings = A._settings_of("pymunk", "dt=0.002,iterations=60", "dt")
     assert settings == {"dt": 0.002, "iterations": 60, "output_dt": 0.002}
@@ -209,7 +209,7 @@ def test_advise_on_a_user_scene_file(tmp_path):
 def test_cli_advise_on_a_user_scene_file(tmp_path, capsys):
     """`rockbench advise FILE --tolerance 0.05 --quick --json` on a user's scene file: JSON
     naming the engine considered, both figures, and the settings mapping when it stands."""
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     f = tmp_path / "my-block.toml"
     f.write_text('name = "my-block"\n[structure]\ntype = "block"\nwidth = 1.0\nheight = 4.0\n')
@@ -227,7 +227,7 @@ def test_cli_advise_on_a_user_scene_file(tmp_path, capsys):
 
 
 def test_cli_advise_rejects_a_bad_tolerance(capsys):
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     assert main(["advise", "housner-block", "--tolerance", "2"]) == 2
     assert "tolerance" in capsys.readouterr().err
@@ -238,7 +238,7 @@ def test_cli_advise_paper_asymmetric_quick(capsys):
     """The command of the issue, quick form, on the paper's asymmetric frame with MuJoCo: the
     answer names both figures (chosen, held-out); a recommendation stands only with its held-out
     worst error within the tolerance, and its settings run as they are."""
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     assert main(["advise", "paper-asymmetric", "--tolerance", "0.05", "--json", "--quick",
                  "--engine", "mujoco", "--workers", "1", "--quiet"]) == 0
@@ -262,7 +262,7 @@ def test_cli_advise_paper_asymmetric_quick(capsys):
 def test_the_report_headline_names_a_cost_tie_and_the_larger_margin():
     import pandas as pd
 
-    from rockbench.campaign_choice import recommendation
+    from rockbench.campaign.choice import recommendation
 
     def frame(cost_b):
         return pd.DataFrame([
@@ -296,8 +296,8 @@ def test_the_advice_follows_the_backends_own_precision_knob():
     accuracy curve (Drake's CENIC) is advised on that knob, the others on dt."""
     import pytest
 
-    from rockbench.advise import ADVISE_DTS, precision_knob
-    from rockbench.tradeoff import precision_sweeps
+    from rockbench.studies.advise import ADVISE_DTS, precision_knob
+    from rockbench.studies.tradeoff import precision_sweeps
 
     assert precision_knob("pymunk") == ("dt", tuple(ADVISE_DTS))
     try:

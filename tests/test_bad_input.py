@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import rockbench as rb
-from rockbench.cli import main
+from rockbench.cli.main import main
 from rockbench.errors import ParameterError, RecordError, SceneError
 
 

@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench.cli import main
+from rockbench.cli.main import main
 from rockbench.result import HISTORY_COLUMNS
 
 RECORDS = Path(__file__).resolve().parents[2] / "shared" / "records"
@@ -420,7 +420,7 @@ def test_compare_report(tmp_path, capsys):
 
 
 def test_report_passes_options_to_run_campaign(tmp_path, capsys, monkeypatch):
-    import rockbench.campaign as campaign
+    import rockbench.campaign.run as campaign
 
     seen = {}
 
@@ -455,7 +455,7 @@ def test_a_broken_compare_module_fails_loudly(monkeypatch):
     real_import = builtins.__import__
 
     def broken(name, globals=None, locals=None, fromlist=(), level=0):
-        if level == 1 and name == "" and fromlist and "compare" in fromlist:
+        if level == 2 and name == "" and fromlist and "compare" in fromlist:
             raise ImportError("simulated: rockbench.compare is broken")
         return real_import(name, globals, locals, fromlist, level)
 
@@ -511,7 +511,7 @@ def test_one_setting_grammar_refuses_before_running(capsys, tmp_path, monkeypatc
 
 
 def test_tradeoff_settings_reach_the_sweep_in_the_one_grammar(capsys, monkeypatch):
-    import rockbench.tradeoff as tradeoff_mod
+    import rockbench.studies.tradeoff as tradeoff_mod
 
     seen = {}
 
@@ -530,12 +530,12 @@ def test_tradeoff_settings_reach_the_sweep_in_the_one_grammar(capsys, monkeypatc
 
 
 def test_engine_option_repeatable_and_comma_lists_are_one_option(capsys, monkeypatch):
-    import rockbench.campaign as campaign
+    import rockbench.campaign.run as campaign
 
     seen = {}
     monkeypatch.setattr(campaign, "run_campaign",
                         lambda out_dir="reports", **kw: seen.update(kw) or Path(out_dir))
-    monkeypatch.setattr("rockbench.cli._print_constants", lambda out, scenes=None: None)
+    monkeypatch.setattr("rockbench.cli.main._print_constants", lambda out, scenes=None: None)
     assert main(["report", "--engine", "pymunk", "--engines", "mujoco,pymunk"]) == 0
     assert seen["engines"] == ["pymunk", "mujoco"]
 

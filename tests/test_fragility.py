@@ -12,7 +12,7 @@ import pytest
 from scipy.stats import norm
 
 from rockbench.errors import ParameterError
-from rockbench.fragility import (MEASURES, _holm, analyse, bootstrap, fit_lognormal,
+from rockbench.studies.fragility import (MEASURES, _holm, analyse, bootstrap, fit_lognormal,
                                  fragility_curve, intensity, parse_scales, peak_test,
                                  resolve_records, run_fragility)
 from rockbench.scene.motion import Record
@@ -252,7 +252,7 @@ def test_resume_after_an_interruption(tmp_path, monkeypatch):
 # the command
 # ---------------------------------------------------------------------------------------------
 def test_cli_end_to_end_json(tmp_path, capsys):
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     pytest.importorskip("pymunk")
     d = _write_tiny_records(tmp_path / "recs")
@@ -279,7 +279,7 @@ def test_cli_end_to_end_json(tmp_path, capsys):
 
 
 def test_cli_bad_input_is_one_line(capsys):
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     assert main(["fragility", "paper-asymmetric", "--records", "bundled",
                  "--scales", "2:1:3"]) == 2
@@ -295,7 +295,7 @@ def test_cli_bad_input_is_one_line(capsys):
 def test_section_html_and_table(tmp_path):
     """The page block shows each engine's verdict and the figures (curves, peaks, Fig. 9); the
     table has one row per backend with the fit and the test."""
-    from rockbench.campaign_fragility import section_table
+    from rockbench.campaign.fragility import section_table
     from rockbench.report.fragility_figures import fragility_html, plot_fragility
 
     caps = _quantile_capacities(10, 2.0, 0.4)
@@ -322,7 +322,7 @@ def test_section_html_and_table(tmp_path):
 def test_section_quick_end_to_end(tmp_path):
     """The campaign's part at its quick size on the bundled records: both Fig. 9 frames run,
     the analytic model on the whole ladder, the fast engines on part of it."""
-    from rockbench.campaign_fragility import fragility_section
+    from rockbench.campaign.fragility import fragility_section
 
     sec = fragility_section({"free-standing": "paper-asymmetric",
                              "hybrid": "paper-asymmetric-hybrid-eps1"},
@@ -360,7 +360,7 @@ def test_peaks_below_the_uplift_threshold_count_as_no_rocking():
 
 def test_records_option_repeats_like_engine():
     """`--records A --records B C` keeps all three (the last one alone was kept before)."""
-    from rockbench.cli import build_parser
+    from rockbench.cli.main import build_parser
 
     a = build_parser().parse_args(["fragility", "housner-block", "--records", "a",
                                    "--records", "b", "c"])

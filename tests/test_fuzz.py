@@ -36,7 +36,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import rockbench as rb
-from rockbench.cli import main
+from rockbench.cli.main import main
 from rockbench.errors import RockbenchError
 
 #: Seconds a single case may take before it counts as a hang.

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench.maps import MAP_COLUMNS, load_map, map_agreement, map_cells, run_map
+from rockbench.studies.maps import MAP_COLUMNS, load_map, map_agreement, map_cells, run_map
 
 GRID = dict(grid=(10, 10), amplitude="1.5:8", frequency="4:10", pulses="symmetric+", tail=0.5)
 ENGINES = [e for e in rb.available_backends() if e != "analytic"]
@@ -133,7 +133,7 @@ def test_map_on_a_real_dask_cluster(analytic_map):
 def test_map_command_line(tmp_path, capsys):
     import json
 
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     store = tmp_path / "m.parquet"
     args = ["map", "paper-asymmetric", "--grid", "3x2", "--amplitude", "2:6", "--frequency",
@@ -153,7 +153,7 @@ def test_map_command_line(tmp_path, capsys):
 def test_a_measured_map_is_reused_only_when_it_reproduces(tmp_path):
     """``reuse_map``: a complete store written for the same inputs is reused after sample cells
     re-run now reproduce it; a tampered, incomplete or foreign store is not (and says why)."""
-    from rockbench.maps import reuse_map
+    from rockbench.studies.maps import reuse_map
 
     cells = dict(grid=(3, 2), amplitude="2:8", frequency="6:10", pulses="all", tail=0.5)
     store = tmp_path / "m.parquet"
@@ -207,8 +207,8 @@ def test_the_committed_engine_maps_reproduce(engine, scene):
     fails, rerun ``rockbench report --full`` and commit the maps it measures."""
     from pathlib import Path
 
-    from rockbench.campaign_maps import ENGINE_AXES, MEASURED_GRID
-    from rockbench.maps import reuse_map
+    from rockbench.campaign.maps import ENGINE_AXES, MEASURED_GRID
+    from rockbench.studies.maps import reuse_map
 
     if engine not in rb.available_backends():
         pytest.skip(f"{engine} is not installed")
@@ -241,7 +241,7 @@ def test_run_map_takes_a_scene_object(tmp_path):
 def test_map_figure_and_overlay(tmp_path, capsys):
     import json
 
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     store = tmp_path / "m.parquet"
     cells = ["--grid", "3x2", "--amplitude", "2:6", "--frequency", "2:4", "--pulses",
@@ -272,7 +272,7 @@ def test_adaptive_map_reproduces_the_full_grid_simulating_a_third(tmp_path, caps
     cells and gives the full map."""
     import json
 
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     kw = dict(grid=(24, 24), progress=False)
     full = run_map("paper-asymmetric", **kw)

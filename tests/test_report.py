@@ -21,11 +21,11 @@ import pytest
 
 import rockbench as rb
 from rockbench.compare import ETA_COLUMNS, METRIC_COLUMNS, TOLERANCES, compare
-from rockbench import campaign as C
+from rockbench.campaign import run as C
 from rockbench.report import case_page as P
 from rockbench.report import figures as F
 from rockbench.report import write_case_report
-from rockbench.campaign import run_campaign
+from rockbench.campaign.run import run_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -391,7 +391,7 @@ def test_campaign_bad_input(tmp_path):
 def test_plan_fracture_cases_fracture_in_the_analytic_model():
     """The campaign's fracture cases do what cases.toml says: the analytic model fractures the
     tendons in each; the first survives, the others overturn."""
-    from rockbench.campaign import _pulse_duration
+    from rockbench.campaign.run import _pulse_duration
     from rockbench.sweep.cases import campaign_plan
 
     cases = campaign_plan()["fracture_cases"]
@@ -453,7 +453,7 @@ def test_quick_campaign_record_bands(quick):
 
 
 def test_default_records_are_the_bundled_ones():
-    from rockbench.campaign import _bundled_dir
+    from rockbench.scene.records import bundled_dir
 
-    names = sorted(p.name for p in _bundled_dir().glob("*.AT2"))
+    names = sorted(p.name for p in bundled_dir().glob("*.AT2"))
     assert names == ["IV1940_ElCentro_180.AT2", "IV1979_ElCentroArray4_230.AT2"]

@@ -1,4 +1,4 @@
-"""The predictability band (rockbench.sensitivity): the unperturbed peak lies in its own band, a
+"""The predictability band (rockbench.studies.sensitivity): the unperturbed peak lies in its own band, a
 wrong engine result falls outside it, the perturbations do what they say."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import pytest
 
 import rockbench as rb
 from rockbench.scene.motion import Record
-from rockbench.sensitivity import (PERTURBATIONS, Perturbation, _simulate, assert_within_band,
+from rockbench.studies.sensitivity import (PERTURBATIONS, Perturbation, _simulate, assert_within_band,
                                    band, perturbed_case)
 
 

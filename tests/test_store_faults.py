@@ -18,8 +18,8 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench.cli import main
-from rockbench.maps import (MAP_COLUMNS, load_map, map_agreement, map_cells, mark_near_boundary,
+from rockbench.cli.main import main
+from rockbench.studies.maps import (MAP_COLUMNS, load_map, map_agreement, map_cells, mark_near_boundary,
                             run_map)
 
 CELLS = dict(grid=(3, 2), amplitude="2:8", frequency="4:8", pulses="symmetric+", tail=0.5)
@@ -219,7 +219,7 @@ KILLABLE = dict(grid=(6, 4), amplitude="2:8", frequency="2:5", pulses="symmetric
                 keyed_by_code=False)
 _KILLABLE = textwrap.dedent(f"""
     import sys
-    from rockbench.maps import run_map
+    from rockbench.studies.maps import run_map
     KILLABLE = {KILLABLE!r}
     run_map("paper-asymmetric", method="solve_ivp", store=sys.argv[1], progress=False,
             chunk=1, workers=1, **KILLABLE)
@@ -354,7 +354,7 @@ def test_analytic_rows_keep_the_order_of_their_cells():
     fall extension and the near-boundary marks rely on: they match rows by position)."""
     import random
 
-    from rockbench.maps import _analytic_rows
+    from rockbench.studies.maps import _analytic_rows
 
     cells = map_cells(grid=(4, 3), amplitude="2:8", frequency="3:6", pulses="all")
     random.Random(1).shuffle(cells)
@@ -365,7 +365,7 @@ def test_analytic_rows_keep_the_order_of_their_cells():
 def test_each_engine_cell_is_written_as_it_finishes(tmp_path, monkeypatch):
     """Engine maps write every finished cell (not chunks of 64): each write holds one cell
     before the merge at the end."""
-    import rockbench.maps as M
+    import rockbench.studies.maps as M
 
     sizes = []
     real = M.write_part
@@ -388,7 +388,7 @@ def test_adaptive_map_of_a_frame_with_tendons():
 
 
 def test_a_measured_map_with_a_broken_inputs_file_is_not_reused(good, tmp_path):
-    from rockbench.maps import reuse_map
+    from rockbench.studies.maps import reuse_map
 
     _, store = good
     copy = _copy(store, tmp_path / "m.parquet")

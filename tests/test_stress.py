@@ -7,9 +7,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rockbench import stress as S
+from rockbench.studies import robustness as S
 from rockbench.report.tradeoff_figures import plot_stability_map
-from rockbench.tradeoff import VERDICTS
+from rockbench.studies.tradeoff import VERDICTS
 
 FREE_BLOCK = S.StressPoint("paper", 0.0, "housner-block", (), None, 0.5)
 

@@ -258,7 +258,7 @@ def test_plugin_import_is_cheap():
 
 # --- assert_agree with the analytic model's sensitivity band (issue 14) ----------------------
 def test_band_option_judges_the_peak_against_the_models_own_sensitivity(ref):
-    from rockbench.sensitivity import band
+    from rockbench.studies.sensitivity import band
 
     b = band(BLOCK, PULSE, duration=6.0)
     assert b.high > b.nominal

@@ -1,4 +1,4 @@
-"""Work-precision (rockbench.tradeoff) and its figure: logic and physics on small runs."""
+"""Work-precision (rockbench.studies.tradeoff) and its figure: logic and physics on small runs."""
 
 import json
 import math
@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench import tradeoff as T
+from rockbench.studies import tradeoff as T
 from rockbench.report.tradeoff_figures import pareto_front, plot_work_precision
 
 BLOCK = rb.load_scene("housner-block")
@@ -112,7 +112,7 @@ def test_validation_set_is_chosen_with_the_analytic_model():
         if c.kind == "survive":
             assert r.summary.max_abs_phi_over_alpha >= 0.05     # MIN_PEAK: a real uplift
     # near-boundary cells sit within NEAR_MARGIN of the analytic threshold, on either side
-    from rockbench.validation import NEAR_MARGIN
+    from rockbench.studies.validation import NEAR_MARGIN
     for c in cases:
         if c.group == "near":
             m = dict(c.motion)
@@ -136,7 +136,7 @@ def test_split_is_disjoint_deterministic_and_seeded():
         parts = {c.part for c in a if c.group.split(":")[0] == g}
         assert parts == {"choice", "held-out"}, g
     # deterministic: rebuilt from scratch (caches cleared), the same split
-    from rockbench import validation as V
+    from rockbench.studies import validation as V
     V._validation_set.cache_clear()
     V._make_case.cache_clear()
     assert [(c.name, c.part) for c in T.validation_set(BLOCK)] == [(c.name, c.part) for c in a]
@@ -151,7 +151,7 @@ def test_a_mirror_symmetric_structure_has_no_mirror_twins_in_its_evidence():
     """On Housner's block (its own mirror image) a case and its sign-flipped twin are the same
     physics: the evidence keeps one sign, so no held-out case mirrors a choice case. The
     asymmetric frame keeps both signs."""
-    from rockbench.validation import mirror_symmetric
+    from rockbench.studies.validation import mirror_symmetric
 
     assert mirror_symmetric(BLOCK)
     assert not mirror_symmetric(rb.load_scene("paper-asymmetric"))
@@ -201,7 +201,7 @@ def test_work_precision_figure():
 def test_cli_tradeoff_writes_table_and_figure(tmp_path, capsys):
     import json
 
-    from rockbench.cli import main
+    from rockbench.cli.main import main
 
     f = tmp_path / "blk.toml"
     f.write_text('name = "blk"\n[structure]\ntype = "block"\nwidth = 1.0\nheight = 4.0\n')

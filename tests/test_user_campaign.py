@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import rockbench as rb
-from rockbench.campaign_plan import load_plan, plan_for_scenes
+from rockbench.campaign.plan import load_plan, plan_for_scenes
 from rockbench.errors import ParameterError
 from rockbench.runner import run
 

@@ -81,7 +81,7 @@ class AnalyticSettings:
     eta_factor : factor in (0, 2] [-] on the coefficient of restitution of every impact
         (default 1: the analytic eta of the mechanism rocked into, Eq. 22 / the frame's
         impulse-momentum projection). A sensitivity hook, not a physics setting: the
-        predictability band of :mod:`rockbench.sensitivity` runs the model with eta x (1 +-
+        predictability band of :mod:`rockbench.studies.sensitivity` runs the model with eta x (1 +-
         0.5 %) and x (1 +- 1 %).
     """
 

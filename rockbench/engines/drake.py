@@ -140,7 +140,7 @@ class DrakeBackend(EngineBackend):
     package: ClassVar[str] = "drake"
     Settings: ClassVar[type] = DrakeSettings
 
-    #: The work-precision curves (:func:`rockbench.tradeoff.precision_sweeps`): CENIC's
+    #: The work-precision curves (:func:`rockbench.studies.tradeoff.precision_sweeps`): CENIC's
     #: ``accuracy`` (its knob, not dt), coarse to fine, and a fixed-step solver's ``dt`` over
     #: the sweep's time steps.
     precision_sweeps: ClassVar[tuple] = (

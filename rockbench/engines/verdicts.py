@@ -33,7 +33,7 @@ def _judge_stopped(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray,
 
     * past its critical angle: the fall is finished with the analytic model from the engine's
       last state (phi, phidot at t, under what is left of the ground motion), as the maps
-      finish a fall under way for the reference (``rockbench.maps``): the verdict is the
+      finish a fall under way for the reference (``rockbench.studies.maps``): the verdict is the
       model's from there, and the note says so;
     * inside it, with the ground motion over and the mechanical energy left unable to lift
       |phi| past the peak measured (impacts and dampers only remove energy): the peak and the

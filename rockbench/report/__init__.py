@@ -5,7 +5,7 @@ tables only: it imports no engine, scene, sweep, runner or campaign module.
 >>> from rockbench.report import write_case_report                        # doctest: +SKIP
 >>> write_case_report(compare(scene, pulse), "reports/my-case")           # doctest: +SKIP
 
-The default campaign (what `make report` runs) is :func:`rockbench.campaign.run_campaign`. What
+The default campaign (what `make report` runs) is :func:`rockbench.campaign.run.run_campaign`. What
 the pages show, the agreement colours and their thresholds: ``docs/report.md``.
 """
 

@@ -21,7 +21,7 @@ import pandas as pd
 __all__ = ["decision_sentences", "decision_table", "decision_html", "evidence_note", "pct"]
 
 #: Advice statuses of a setting within the tolerance on the chosen cases that is not
-#: recommended, and why (rockbench.advise.decide).
+#: recommended, and why (rockbench.studies.advise.decide).
 _ALMOST = {"unconfirmed": "unconfirmed: no finer step was run, or the finer one misses the "
                           "tolerance (docs/choosing.md, convergence)",
            "fails held-out": "it fails on the held-out cases",

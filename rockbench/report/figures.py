@@ -563,7 +563,7 @@ def plot_record_peaks(df: pd.DataFrame, *, title: str | None = None) -> Figure:
 
     ``df`` columns: record, frame, polarity (+1/-1), backend, max_abs_phi_over_alpha [-],
     overturned (bool), status; with band_low and band_high (the analytic model's sensitivity
-    band, ``rockbench.sensitivity``), each record's band is shaded grey behind its markers
+    band, ``rockbench.studies.sensitivity``), each record's band is shaded grey behind its markers
     (darker: as recorded, lighter: reversed).
     """
     frames = list(dict.fromkeys(df["frame"])) if len(df) else ["-"]

@@ -1,6 +1,6 @@
 """Figures and the page block of the fragility section (issue 26, ``docs/fragility.md``).
 
-Inputs are plain data: the runs frame and the analysis dict of :mod:`rockbench.fragility`
+Inputs are plain data: the runs frame and the analysis dict of :mod:`rockbench.studies.fragility`
 (``runs``: backend, record, polarity, scale, im, peak = max |phi| / alpha [-], overturned,
 status; ``analysis``: per backend median [IM unit], dispersion [-], intervals, bands, tests).
 Probabilities are drawn as percentages. Figures are at most 11.6 in wide (shown at 100 % in a
@@ -190,7 +190,7 @@ def fragility_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
 
 def fragility_html(section: Mapping[str, Any], figdir=None) -> str:
     """The page block of the fragility section (``section``: what
-    :func:`rockbench.fragility.fragility_section` returns)."""
+    :func:`rockbench.studies.fragility.fragility_section` returns)."""
     from . import html as H
 
     if section.get("error"):

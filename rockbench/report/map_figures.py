@@ -1,6 +1,6 @@
 """Figures of overturning maps (paper Figs. 4-7): the four pulse panels of one map, and an
 engine's verdicts overlaid on the analytic map of the same cells. Reads map frames only
-(columns of :data:`rockbench.maps.MAP_COLUMNS`)."""
+(columns of :data:`rockbench.studies.maps.MAP_COLUMNS`)."""
 
 from __future__ import annotations
 

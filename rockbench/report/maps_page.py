@@ -31,7 +31,7 @@ AGREEMENT_COLUMNS: dict[str, str] = {
 
 
 def maps_html(maps: Mapping[str, Any], figdir, *, analytic_grid: str, axes: str) -> str:
-    """HTML of the map section from :func:`rockbench.campaign_maps.run_maps`'s output."""
+    """HTML of the map section from :func:`rockbench.campaign.maps.run_maps`'s output."""
     parts = []
     for scene, df in maps["analytic"].items():
         parts.append(H.figure_html(

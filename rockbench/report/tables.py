@@ -28,7 +28,7 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "W": "-, omega_g / p",
         "phi0": "rad, initial rotation",
         "band_low": "-, smallest max|phi| / alpha of the analytic model under the perturbations "
-                    "of rockbench.sensitivity (pulse and fracture cases; docs/records.md)",
+                    "of rockbench.studies.sensitivity (pulse and fracture cases; docs/records.md)",
         "band_high": "-, largest max|phi| / alpha under those perturbations",
         "within_band": "-, bool: this backend's peak lies within the band (an overturned run: "
                        "some analytic run of the band overturns too)",
@@ -79,7 +79,7 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "overturned_ref": "-, analytic verdict", "verdict_agrees": "-, bool",
         "peak_rel_error": "-, max|phi| / max|phi_ref| - 1 (both ok and not overturned)",
         "band_low": "-, smallest max|phi| / alpha of the analytic model under the perturbations "
-                    "of rockbench.sensitivity (docs/records.md)",
+                    "of rockbench.studies.sensitivity (docs/records.md)",
         "band_nominal": "-, the unperturbed analytic max|phi| / alpha of the band's runs",
         "band_high": "-, largest max|phi| / alpha under those perturbations",
         "band_verdict_agreement": "-, fraction of perturbed analytic runs with the unperturbed "

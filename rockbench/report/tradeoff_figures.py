@@ -3,13 +3,13 @@
 Like :mod:`rockbench.report.figures`, every function returns a :class:`matplotlib.figure.Figure`
 built without pyplot, from plain tables only:
 
-* :func:`plot_work_precision` - the table of :func:`rockbench.tradeoff.tradeoff`
-  (:data:`rockbench.tradeoff.TABLE_COLUMNS`): error against cost, log-log, one curve per engine
+* :func:`plot_work_precision` - the table of :func:`rockbench.studies.tradeoff.tradeoff`
+  (:data:`rockbench.studies.tradeoff.TABLE_COLUMNS`): error against cost, log-log, one curve per engine
   through its time steps, the median cost of the repeats with its min-max spread as horizontal
   bars, the Pareto front (no other point both cheaper and more accurate) marked, in the style of
   the SciML benchmarks' work-precision diagrams;
-* :func:`plot_stability_map` - the table of :func:`rockbench.stress.stress`
-  (:data:`rockbench.stress.STRESS_COLUMNS`): per backend, each axis value coloured by its class
+* :func:`plot_stability_map` - the table of :func:`rockbench.studies.robustness.stress`
+  (:data:`rockbench.studies.robustness.STRESS_COLUMNS`): per backend, each axis value coloured by its class
   (within 1 %, within 5 %, off, diverged / invalid, outside the analytic model's validity).
 
 Units: cost in process CPU seconds per simulated second [s/s]; errors relative [-].
@@ -27,7 +27,7 @@ from .figures import engine_color
 
 __all__ = ["pareto_front", "plot_work_precision", "plot_stability_map", "CLASS_COLORS"]
 
-#: Colour of every stress class (rockbench.tradeoff.VERDICTS).
+#: Colour of every stress class (rockbench.studies.tradeoff.VERDICTS).
 CLASS_COLORS = {"within 1%": "#2e7d32", "within 5%": "#9ccc65", "off": "#ef6c00",
                 "diverged": "#c62828", "invalid": "#6a1b9a", "outside model": "#9e9e9e"}
 
@@ -134,7 +134,7 @@ def plot_stability_map(stress: pd.DataFrame, engine: str, *, title: str | None =
     """Stability map of one backend: one row per stress axis, its values on a log or linear
     x axis (log when they span more than a factor of 20 and are positive), each point coloured
     by its class (``class`` column: :data:`CLASS_COLORS`). ``stress`` columns: engine, axis,
-    value, class (:data:`rockbench.stress.STRESS_COLUMNS`)."""
+    value, class (:data:`rockbench.studies.robustness.STRESS_COLUMNS`)."""
     s = stress[stress["engine"] == engine]
     axes_names = list(dict.fromkeys(s["axis"]))
     n = max(1, len(axes_names))

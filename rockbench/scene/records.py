@@ -590,7 +590,7 @@ def _check_enough(path: Path, values: np.ndarray) -> None:
 
 # ------------------------------------------------------------------------------------------------
 # Records shipped inside the package (issue 14): rockbench/records/, provenance in its PROVENANCE.md
-def _bundled_dir() -> Path:
+def bundled_dir() -> Path:
     """The package-data folder of the bundled records (``rockbench/records``)."""
     from importlib.resources import files
 
@@ -605,7 +605,7 @@ def bundled_records() -> list[dict[str, Any]]:
     ``dt`` and ``units`` (None for AT2 files: their header gives them), as
     :func:`find_records` returns them. Needs nothing outside the installed package.
     """
-    records, _ = find_records(_bundled_dir())
+    records, _ = find_records(bundled_dir())
     return records
 
 

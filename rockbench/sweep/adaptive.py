@@ -1,5 +1,5 @@
 """Adaptive overturning maps (issue 27, ``docs/maps.md``): simulate where the verdict can
-change, infer the rest. Used by :func:`rockbench.maps.run_map` (``adaptive=True``)."""
+change, infer the rest. Used by :func:`rockbench.studies.maps.run_map` (``adaptive=True``)."""
 
 from __future__ import annotations
 

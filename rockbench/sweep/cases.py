@@ -419,6 +419,7 @@ def _maps_plan(m: dict[str, Any], c: dict[str, Any]) -> dict[str, Any]:
             "engine_frequency": str(m.get("engine_frequency", "1:10")),
             "engine_tail": float(m.get("engine_tail", 3.0)),
             "measured_grid": tuple(int(v) for v in m.get("measured_grid", (12, 12))),
+            "full_grid": tuple(int(v) for v in m.get("full_grid", (100, 100))),
             "fast_grids": {k: tuple(int(x) for x in v)
                            for k, v in m.get("fast_grids", {scenes[0]: (6, 6)}).items()}}
 

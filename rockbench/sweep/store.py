@@ -70,7 +70,7 @@ def key(item: Any) -> str:
 #: lists, which are inputs that the stores key on) enters the fingerprint, so editing a help
 #: text or a figure keeps every stored result.
 PHYSICS_CODE = ("analytic", "engines", "scene", "scenarios", "measure.py", "constants.py",
-                "result.py", "compare.py", "runner.py", "sensitivity.py")
+                "result.py", "compare.py", "runner.py", "studies/sensitivity.py")
 
 
 def fingerprint_files() -> list[str]:
@@ -82,7 +82,7 @@ def fingerprint_files() -> list[str]:
     for f in sorted(root.rglob("*")):
         rel = f.relative_to(root).as_posix()
         if (f.is_file() and f.suffix in (".py", ".toml") and "__pycache__" not in rel
-                and rel.split("/")[0] in PHYSICS_CODE
+                and any(rel == p or rel.startswith(p + "/") for p in PHYSICS_CODE)
                 and not (rel.startswith("scenarios/")          # plans and case lists are
                          and (f.name == "cases.toml" or f.name.endswith("-plan.toml")))):
             out.append(rel)

@@ -105,8 +105,8 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
         Bound on the RMS of (phi - phi_ref) / alpha over the common time grid [-].
     verdict : bool
         Require the same overturning verdict.
-    band : rockbench.sensitivity.Band, optional
-        The analytic model's own sensitivity on this case (:func:`rockbench.sensitivity.band`,
+    band : rockbench.studies.sensitivity.Band, optional
+        The analytic model's own sensitivity on this case (:func:`rockbench.studies.sensitivity.band`,
         ``docs/records.md``). When given, the peak check is "within the band": max|phi| / alpha
         of the result in [band.low, band.high] (``peak_rtol`` is not used), and the verdict
         check accepts any overturning verdict that one of the band's analytic runs reaches.
@@ -146,10 +146,10 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
     n_checks = 0
 
     if band is not None:
-        from ..sensitivity import Band
+        from ..studies.sensitivity import Band
 
         if not isinstance(band, Band):
-            raise ParameterError("band", type(band).__name__, "a rockbench.sensitivity.Band")
+            raise ParameterError("band", type(band).__name__, "a rockbench.studies.sensitivity.Band")
         if band.scene != getattr(result.scene, "name", band.scene):
             raise ParameterError("band", band.scene,
                                  f"the band of this case's scene {result.scene.name!r}")

@@ -33,8 +33,8 @@ def test_a_backend_without_batched_runs_refuses_them():
 
 
 def test_sweeps_and_campaigns_read_the_capabilities():
-    from rockbench.campaign import _job_weight
-    from rockbench.campaign_maps import is_fast
+    from rockbench.campaign.run import _job_weight
+    from rockbench.campaign.maps import is_fast
     from rockbench.sweep.runs import _batch_key
 
     base = {"scene": "housner-block", "overrides": {}, "settings": {}, "duration": 3.0,

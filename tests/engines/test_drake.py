@@ -278,14 +278,14 @@ def test_discrete_solvers_on_the_surviving_pulses(solver):
 
 # --- work-precision: CENIC's knob is the accuracy ------------------------------------------------
 def test_work_precision_sweeps_cenic_accuracy_beside_a_fixed_step_curve():
-    """rockbench.tradeoff sweeps Drake's own knob (DrakeBackend.precision_sweeps): CENIC's
+    """rockbench.studies.tradeoff sweeps Drake's own knob (DrakeBackend.precision_sweeps): CENIC's
     accuracy at the default dt, and a fixed-step solver over the sweep's time steps; the
     table's curve / knob columns keep them apart, and the figure draws them as two curves."""
     import pandas as pd
 
     from rockbench.report.tradeoff_figures import plot_work_precision
-    from rockbench.tradeoff_tables import curve_of as _curve
-    from rockbench.tradeoff import settings_grid
+    from rockbench.studies.tradeoff_tables import curve_of as _curve
+    from rockbench.studies.tradeoff import settings_grid
 
     grid = settings_grid(["drake", "pymunk"], dts=[1e-3, 5e-4])
     drake = [dict(s.overrides) for s in grid if s.engine == "drake"]

@@ -68,7 +68,7 @@ def test_a_frame_that_comes_to_rest_beyond_its_critical_angle_has_collapsed():
     if "pymunk" not in rb.available_backends():
         pytest.skip("pymunk is not installed")
     from rockbench.analytic.reference import reference_of
-    from rockbench.maps import _duration
+    from rockbench.studies.maps import cell_duration as _duration
 
     scene = rb.load_scene("paper-asymmetric")
     pulse = rb.RickerPulse.dimensionless(6.7272727, 1.0, scene.structure, "symmetric", 1)

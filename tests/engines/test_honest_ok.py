@@ -52,7 +52,7 @@ def test_a_sliding_collapse_is_flagged_against_the_reference():
     """MuJoCo under A = 50 (paper-asymmetric, fall angle 4 alpha) overturns with the reference
     but its columns slide over 0.1 m while falling: the engine run may say ok (slip while
     falling is allowed, tests/engines/test_falling.py), the stress row must not."""
-    from rockbench.stress import _point, run_point
+    from rockbench.studies.robustness import _point, run_point
 
     row = run_point(("mujoco", _point("A", 50.0)))
     assert row["class"] in ("off", "diverged", "invalid")

@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 import rockbench as rb
 from rockbench.analytic.dynamics import Dynamics
 from rockbench.analytic.reference import Reference
-from rockbench.cli import main
+from rockbench.cli.main import main
 from rockbench.errors import ParameterError, RockbenchError, SceneError
 from rockbench.scene.devices import Devices
 from rockbench.scene.schema import FIELDS, fields_of, markdown, required

@@ -1,5 +1,5 @@
 """The ``rockbench map`` command (issue 11, ``docs/maps.md``): arguments and output only;
-the work is :mod:`rockbench.maps`."""
+the work is :mod:`rockbench.studies.maps`."""
 
 from __future__ import annotations
 
@@ -8,24 +8,20 @@ import os
 import sys
 from pathlib import Path
 
-from .cli_input import backend_overrides
-from .errors import ParameterError
+from .common import (add_quiet_option, add_setting_option, arg_count, arg_key_value,
+                     backend_overrides, print_json)
+from ..errors import ParameterError
 
 __all__ = ["add_map_command", "cmd_map"]
 
 
-def print_json(data) -> None:
-    from .cli import _print_json
-    _print_json(data)
-
-
-def add_map_command(sub, _key_value, _count) -> None:
+def add_map_command(sub) -> None:
     """map (issue 11; docs/maps.md)."""
     p = sub.add_parser("map", help="overturning map of a scene over (A, W) under Ricker pulses, "
                        "or --compare two stored maps")
     p.add_argument("scene", metavar="SCENE", nargs="?",
                    help="a built-in scene name or a path to a .toml file")
-    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=_key_value,
+    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=arg_key_value,
                    action="append", default=[], help="override a scene parameter")
     p.add_argument("--engine", default="analytic", metavar="NAME", help="backend (default "
                    "analytic, through its compiled path)")
@@ -38,14 +34,13 @@ def add_map_command(sub, _key_value, _count) -> None:
     p.add_argument("--pulses", default="all", metavar="P",
                    help="all, or a comma-separated subset of symmetric+, symmetric-, "
                         "antisymmetric+, antisymmetric-")
-    from .cli import add_quiet_option, add_setting_option
 
     add_setting_option(p, "set")       # the one grammar; analytic: method=compiled|solve_ivp
     add_quiet_option(p)
     p.add_argument("--store", metavar="FILE.parquet",
                    help="resumable Parquet store (a folder; default maps/SCENE_ENGINE.parquet)")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=_count, metavar="N", help="local worker processes")
+    g.add_argument("--workers", type=arg_count, metavar="N", help="local worker processes")
     g.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
     p.add_argument("--compare", nargs=2, metavar=("A.parquet", "B.parquet"),
                    help="two stored maps of the same cells: agreement, kappa, boundary shift "
@@ -84,7 +79,7 @@ def _figure_path(text: str | None) -> Path | None:
     """The --figure path, checked before any work: a known image suffix, a writable folder."""
     if text is None:
         return None
-    from .errors import RockbenchError
+    from ..errors import RockbenchError
 
     path = Path(text)
     if path.suffix.lower() not in (".png", ".pdf", ".svg"):
@@ -102,7 +97,7 @@ def _figure_path(text: str | None) -> Path | None:
 
 
 def _save(fig, path: Path) -> None:
-    from .errors import RockbenchError
+    from ..errors import RockbenchError
 
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
     try:
@@ -116,13 +111,13 @@ def _save(fig, path: Path) -> None:
 
 def _with_near_boundary(df, store: Path):
     """``df`` (the first map of --compare) with its cells near the boundary marked
-    (:func:`rockbench.maps.mark_near_boundary`) when its store says it is an analytic map
+    (:func:`rockbench.studies.maps.mark_near_boundary`) when its store says it is an analytic map
     (its scene and run length are in ``_inputs.json``); otherwise ``df`` unchanged."""
     import re
 
-    from .maps import mark_near_boundary
-    from .scene.scene import Scene
-    from .sweep.map_store import read_inputs
+    from ..studies.maps import mark_near_boundary
+    from ..scene.scene import Scene
+    from ..sweep.map_store import read_inputs
 
     inputs = read_inputs(store)
     if not isinstance(inputs, dict) or inputs.get("engine") != "analytic" or not len(df):
@@ -137,8 +132,8 @@ def _same_structure(first: str, second: str) -> None:
     """RockbenchError unless the two stores' ``_inputs.json`` name the same structure (its
     parameters, the name and description aside): a map of one structure says nothing about
     another's verdicts, even on the same (A, W) cells."""
-    from .errors import RockbenchError
-    from .sweep.map_store import read_inputs
+    from ..errors import RockbenchError
+    from ..sweep.map_store import read_inputs
 
     scenes = []
     for path in (first, second):
@@ -158,8 +153,8 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 
 def _cmd_map(args: argparse.Namespace) -> int:
-    from .errors import RockbenchError
-    from .maps import NEAR_BOUNDARY_MARGIN, describe_shift, load_map, map_agreement, run_map
+    from ..errors import RockbenchError
+    from ..studies.maps import NEAR_BOUNDARY_MARGIN, describe_shift, load_map, map_agreement, run_map
 
     figure = _figure_path(args.figure)
     if args.compare:
@@ -175,7 +170,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         out["boundary"] = ag["shift"].to_dict(orient="records")
         out["in_words"] = describe_shift(ag["shift"], Path(args.compare[1]).stem)
         if figure is not None:
-            from .report.map_figures import plot_map_overlay
+            from ..report.map_figures import plot_map_overlay
 
             name = Path(args.compare[1]).stem
             _save(plot_map_overlay(a, b, name=name, title=f"{name} on {Path(args.compare[0]).stem}"
@@ -198,7 +193,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         return 0
     if not args.scene:
         raise ParameterError("SCENE", None, "a scene name or .toml path (or --compare A B)")
-    from .cli_input import scene_overrides as _overrides
+    from .common import scene_overrides as _overrides
 
     scene_overrides = _overrides(args.overrides) if args.overrides else None
     method, texts = None, []
@@ -222,7 +217,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     if args.adaptive:
         summary["inferred"] = int(df.attrs.get("inferred", 0))
     if figure is not None:
-        from .report.map_figures import plot_map_panels
+        from ..report.map_figures import plot_map_panels
 
         _save(plot_map_panels(df, title=f"{df.attrs.get('scene', args.scene)}, {args.engine}"),
               figure)

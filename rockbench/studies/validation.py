@@ -40,7 +40,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
-from .errors import ParameterError
+from ..errors import ParameterError
 from .maps import NEAR_BOUNDARY_MARGIN
 
 __all__ = ["ValidationCase", "validation_set", "candidate_cases", "overturn_threshold",
@@ -53,7 +53,7 @@ _PULSES = (("symmetric", 1), ("symmetric", -1), ("antisymmetric", 1), ("antisymm
 AWAY_LEVELS = (0.2, 0.5, 0.85)       # fraction of the way from A_up to A_ov
 NEAR_LEVELS = (0.99, 1.01)           # x A_ov (within NEAR_MARGIN)
 #: Cells whose A is within this relative distance of the analytic overturning threshold are
-#: "near the boundary" (the maps' one margin, :data:`rockbench.maps.NEAR_BOUNDARY_MARGIN`): a
+#: "near the boundary" (the maps' one margin, :data:`rockbench.studies.maps.NEAR_BOUNDARY_MARGIN`): a
 #: verdict that differs from the reference there is reported, not counted as wrong.
 NEAR_MARGIN = NEAR_BOUNDARY_MARGIN
 OVER_LEVEL = 1.3                     # x A_ov
@@ -116,7 +116,7 @@ class ValidationCase:
 
     def load(self, scene):
         """(scene with this case's fall angle, GroundMotion or None)."""
-        from .scene.motion import motion_from_spec
+        from ..scene.motion import motion_from_spec
 
         sc = scene if self.fall is None else scene.replace(fall_angle=self.fall)
         return sc, motion_from_spec(self.motion_spec(), sc.structure)
@@ -142,13 +142,13 @@ def _scene_key(scene) -> str:
 
 @functools.lru_cache(maxsize=64)
 def _scene_from_key(text: str):
-    from .scene.scene import Scene
+    from ..scene.scene import Scene
 
     return Scene.from_dict(json.loads(text))
 
 
 def _pulse(scene, A: float, W: float, shape: str, sign: int):
-    from .scene.motion import RickerPulse
+    from ..scene.motion import RickerPulse
 
     return RickerPulse.dimensionless(A, W, scene.structure, shape, sign)
 
@@ -156,7 +156,7 @@ def _pulse(scene, A: float, W: float, shape: str, sign: int):
 def _analytic(scene, motion, duration: float, phi0: float = 0.0, *, compiled: bool = False):
     """The analytic reference run (``compiled``: the numba path, same answers, for the cells'
     labels and the records)."""
-    from .runner import run
+    from ..runner import run
 
     if compiled:
         return run(scene, motion, engine="analytic", duration=duration, phi0=phi0,
@@ -211,7 +211,7 @@ def overturn_threshold(scene, W: float, shape: str = "symmetric", sign: int = 1,
 def uplift_threshold(scene) -> float:
     """A_up = min|lambda| / tan(alpha) [-]: the smallest A of a ground acceleration that uplifts
     the structure in either direction (lambda: the uplift thresholds of the reference)."""
-    from .analytic.reference import reference_of
+    from ..analytic.reference import reference_of
 
     lam = reference_of(scene).lam
     return min(abs(float(v)) for v in lam.values()) / math.tan(scene.alpha)
@@ -245,7 +245,7 @@ def mirror_symmetric(scene) -> bool:
     coefficients and fall angles both ways): a case and its sign-flipped twin are then the same
     physics, so the evidence keeps one of them (else a held-out case could be the mirror image
     of a choice case)."""
-    from .analytic.reference import reference_of
+    from ..analytic.reference import reference_of
 
     ref = reference_of(scene)
     lam, eta, fall = ref.lam, ref.eta, scene.fall_angles
@@ -282,7 +282,7 @@ def _candidates(key: str) -> tuple[tuple[str, dict[str, Any]], ...]:
             for f in NEAR_LEVELS:
                 out.append(("near", {"kind": "pulse", "A": round(f * A_ov, 4), **base}))
             out.append(("overturn", {"kind": "pulse", "A": round(OVER_LEVEL * A_ov, 4), **base}))
-    from .scene.records import bundled_records
+    from ..scene.records import bundled_records
 
     pga_up = 9.81 * A_up * math.tan(scene.alpha)
     for rec in bundled_records():
@@ -328,7 +328,7 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
         return ValidationCase(kind, name, spec, 0.0, dur, fall,
                               float(r.summary.max_abs_phi_over_alpha), near_boundary=near,
                               a_ratio=round(ratio, 4))
-    from .scene.motion import motion_from_spec
+    from ..scene.motion import motion_from_spec
 
     spec = {"kind": "record", "path": desc["path"], "scale": 1.0}
     rec = motion_from_spec(spec, scene.structure)

@@ -43,16 +43,16 @@ from typing import Any
 
 import pandas as pd
 
-from .report import campaign_page as P
-from .report import tables as T
-from .report.conclusions import campaign_conclusion
-from .report.tables import CAMPAIGN_COLUMNS
-from .result import motion_label
-from .runner import REFERENCE, resolve_engines
-from .scene.records import find_records
-from .sweep import store as S
-from .sweep.cases import campaign_plan
-from .sweep.executors import check_options, cpu_count, execute
+from ..report import campaign_page as P
+from ..report import tables as T
+from ..report.conclusions import campaign_conclusion
+from ..report.tables import CAMPAIGN_COLUMNS
+from ..result import motion_label
+from ..runner import REFERENCE, resolve_engines
+from ..scene.records import bundled_dir, find_records
+from ..sweep import store as S
+from ..sweep.cases import campaign_plan
+from ..sweep.executors import check_options, cpu_count, execute
 
 __all__ = [
     "CAMPAIGN_COLUMNS",
@@ -100,16 +100,14 @@ RECORD_FRAMES: dict[str, str] = _PLAN["record_frames"]
 
 
 def _pulse_duration(scene_name: str, A: float, W: float, shape: str, tail: float | None):
-    """Duration [s] of a pulse run: the pulse window (6 T_g) plus ``tail`` s (None: the
-    package default, pulse + 10 s)."""
+    """Duration [s] of a pulse run of the campaign: :func:`rockbench.studies.maps.cell_duration`
+    (the pulse window 6 T_g plus ``tail``; None: the package default)."""
     if tail is None:
         return None
-    from .scene import load_scene
-    from .scene.motion import RickerPulse
+    from ..scene import load_scene
+    from ..studies.maps import cell_duration
 
-    sc = load_scene(scene_name)
-    p = RickerPulse.dimensionless(A, W, sc.structure, shape, 1)
-    return float(p.t_end - p.t_start + tail)
+    return cell_duration(load_scene(scene_name), W, tail)
 
 
 # ==========================================================================================
@@ -119,18 +117,18 @@ def _job_label(job: Mapping[str, Any]) -> str:
     """``"<scene> symm+ A=3 W=4"``, ``"<scene> free rocking"``, ``"<engine> dt=0.001 s"``."""
     if job["kind"] == "dt":
         return f"{job['engine']} dt={job['dt']:g} s"
-    from .campaign_maps import scene_label
+    from .maps import scene_label
 
     return f"{scene_label(job['scene'])} {motion_label(job.get('motion'))}"
 
 
 def _run_job(job: dict[str, Any]) -> dict[str, Any]:
     """One comparison job (in a worker): returns a small, picklable payload."""
-    from .compare import compare, eta_rows, metrics
-    from .report.figures import Trace
-    from .runner import run
-    from .scene import load_scene
-    from .scene.motion import motion_from_spec
+    from ..compare import compare, eta_rows, metrics
+    from ..report.figures import Trace
+    from ..runner import run
+    from ..scene import load_scene
+    from ..scene.motion import motion_from_spec
 
     scene = load_scene(job["scene"])
     motion = motion_from_spec(job.get("motion"), scene.structure)
@@ -172,11 +170,11 @@ def _run_job(job: dict[str, Any]) -> dict[str, Any]:
 
 def _pulse_band(scene, motion, job, phi0, results) -> tuple[dict | None, dict]:
     """The analytic model's sensitivity band of a pulse or fracture case
-    (:func:`rockbench.sensitivity.band`) as a dict, and each ok backend's (inside, distance
+    (:func:`rockbench.studies.sensitivity.band`) as a dict, and each ok backend's (inside, distance
     [alpha]) against it; (None, {}) for free rocking or if the band cannot be computed."""
     if job["kind"] not in ("pulse", "fracture") or motion is None:
         return None, {}
-    from .sensitivity import band
+    from ..studies.sensitivity import band
 
     try:
         b = band(scene, motion, duration=job["duration"], phi0=phi0)
@@ -200,8 +198,8 @@ def _run_job_safe(job: dict[str, Any]) -> dict[str, Any]:
 
 def _relative_cost(engine: str) -> float:
     """The backend's ``relative_cost`` capability (1.0 for a backend that does not import)."""
-    from .engines import get_backend
-    from .errors import BackendUnavailable
+    from ..engines import get_backend
+    from ..errors import BackendUnavailable
 
     try:
         return float(get_backend(engine).relative_cost)
@@ -247,7 +245,7 @@ def _comparisons(jobs: Sequence[dict[str, Any]], *, cache: Path, desc: str,
 
 
 def _sweep(cases: list[dict[str, Any]], *, store: Path | None, **run: Any) -> pd.DataFrame:
-    from .sweep import run_cases
+    from ..sweep import run_cases
 
     if not cases:
         return pd.DataFrame()
@@ -259,21 +257,21 @@ def _sweep(cases: list[dict[str, Any]], *, store: Path | None, **run: Any) -> pd
 # ==========================================================================================
 def _engine_versions() -> dict[str, str]:
     """Backend name -> engine version, or why it is unavailable (the page's versions)."""
-    from .engines import engine_info
+    from ..engines import engine_info
 
     return {r["name"]: (r.get("version") if r["available"]
                         else f"unavailable: {r.get('reason', '')}") for r in engine_info()}
 
 
 def _scene_label(ref: Any) -> str:
-    from .campaign_maps import scene_label
+    from .maps import scene_label
 
     return scene_label(ref)
 
 
 def _hybrid(scenes) -> dict[str, bool]:
     """Scene name -> whether it has devices (tendons, dampers)."""
-    from .scene import load_scene
+    from ..scene import load_scene
 
     out = {}
     for s in scenes:
@@ -302,7 +300,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         runs). Unavailable ones are listed on the page and skipped.
     records_dir : a folder of records (``.AT2`` files, or headerless files listed in a
         ``records.csv`` with their dt): the peak rotation per record (paper Fig. 9), with the
-        analytic model's sensitivity band of each (``rockbench.sensitivity``). Default: the
+        analytic model's sensitivity band of each (``rockbench.studies.sensitivity``). Default: the
         records bundled in the package (``rockbench/records``, ``docs/records.md``), except
         with ``quick``.
     quick : a few cases only (tests, a first look; well under a minute).
@@ -313,18 +311,18 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         (``dask_address``: a running scheduler; none: a local cluster).
     workers : worker processes (default: one per available core).
     full : the long campaign: every engine's overturning map at 12 x 12 x 4 on both map
-        scenes, measured into ``out_dir/engine-maps`` (:mod:`rockbench.campaign_maps`: the
+        scenes, measured into ``out_dir/engine-maps`` (:mod:`rockbench.campaign.maps`: the
         default reuses those maps after re-running sample cells of each) and the full form of
-        the stability sweep of every engine (:mod:`rockbench.campaign_choice`; the default runs
+        the stability sweep of every engine (:mod:`rockbench.campaign.choice`; the default runs
         its fast form); the default keeps ``make report`` within its budget. Everything is
         kept in the store and reused.
     scenes : the structures to report on (built-in names, TOML paths or Scenes; the first one
         is the structure the decision is about): the campaign's plan is derived from them
-        (:func:`rockbench.campaign_plan.plan_for_scenes`). Default: the paper's plan.
-    plan : a plan file (``kind = "campaign-plan"``, :func:`rockbench.campaign_plan.load_plan`)
+        (:func:`rockbench.campaign.plan.plan_for_scenes`). Default: the paper's plan.
+    plan : a plan file (``kind = "campaign-plan"``, :func:`rockbench.campaign.plan.load_plan`)
         or a plan mapping; overrides ``scenes``.
     """
-    from .engines import available_backends
+    from ..engines import available_backends
 
     t_start = time.perf_counter()
     check_options(executor, workers, dask_address)
@@ -332,7 +330,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     names = [REFERENCE] + [n for n in names if n != REFERENCE]
     fragility_records = records_dir      # None: the fragility section's own ensemble (issue 26)
     if records_dir is None and not quick:
-        records_dir = _bundled_dir()       # the public-domain records shipped in the package
+        records_dir = bundled_dir()       # the public-domain records shipped in the package
     if records_dir is not None:
         find_records(records_dir)          # a bad folder fails now, not after the pulses
     avail = set(available_backends())
@@ -343,10 +341,10 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     if isinstance(plan, Mapping):
         plan = dict(plan)
     elif plan is not None:
-        from .campaign_plan import load_plan
+        from .plan import load_plan
         plan = load_plan(plan, quick=quick, folder=out / "scenes")
     elif scenes:
-        from .campaign_plan import plan_for_scenes
+        from .plan import plan_for_scenes
         plan = plan_for_scenes(scenes, quick=quick, folder=out / "scenes")
     else:
         plan = campaign_plan(quick)
@@ -404,7 +402,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
 
     # 3: overturning map -----------------------------------------------------------------
     t = time.perf_counter()
-    from .sweep import pulse_grid
+    from ..sweep import pulse_grid
 
     map_cases = []
     for A in plan["map_A"]:
@@ -419,7 +417,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
 
     # 3b: overturning maps at the paper's resolution (paper Figs. 4-7) ------------------------
     t = time.perf_counter()
-    from .campaign_maps import run_maps
+    from .maps import run_maps
 
     maps = run_maps(names, store_dir / fingerprint / "maps", full=full, quick=quick,
                     measured=Path(out_dir) / "engine-maps", progress=progress,
@@ -429,7 +427,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
 
     # 3c: choosing a modelling approach (work-precision, advice, stability) -----------------
     t = time.perf_counter()
-    from .campaign_choice import run_choice
+    from .choice import run_choice
 
     choice = run_choice(names, store_dir, quick=quick, full=full, workers=workers,
                         progress=progress, scene=plan["choice_scene"], dts=plan["choice_dts"],
@@ -444,11 +442,11 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         records = _records(records_dir, plan, names, notes, store=sweep_store, **run)
     timings["records"] = time.perf_counter() - t
 
-    # 6: fragility over an ensemble of records (issue 26; rockbench/campaign_fragility.py) ----
+    # 6: fragility over an ensemble of records (issue 26; rockbench/campaign/fragility.py) ----
     t = time.perf_counter()
     frag: dict[str, Any] = {}
     if not quick:
-        from .campaign_fragility import fragility_section
+        from .fragility import fragility_section
 
         frag = fragility_section(plan["record_frames"], names, records=fragility_records,
                                  size="full" if full else "default",
@@ -469,7 +467,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     if len(records):
         files["record_peaks.csv"] = records
     if frag.get("frames"):
-        from .campaign_fragility import section_table
+        from .fragility import section_table
         files["fragility.csv"] = section_table(frag)
     if choice.get("stress") is not None:
         files["stress.csv"] = choice["stress"]
@@ -490,9 +488,9 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                                quick=quick, records_dir=records_dir, store_dir=store_dir,
                                fingerprint=fingerprint, engine_versions=_engine_versions(),
                                files=list(files))
-    from .report.choice_page import choice_html, work_precision_html
-    from .report.decision import decision_html, evidence_note
-    from .report.maps_page import maps_html
+    from ..report.choice_page import choice_html, work_precision_html
+    from ..report.decision import decision_html, evidence_note
+    from ..report.maps_page import maps_html
 
     mp = plan["maps"]
     g = (12, 12) if quick else mp["analytic_grid"]           # what run_maps ran
@@ -506,7 +504,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
             axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
                  f"+ {mp['engine_tail']:g} s"))
     if frag:                                   # issue 26: report/fragility_figures.py
-        from .report.fragility_figures import fragility_html
+        from ..report.fragility_figures import fragility_html
         sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)" if paper
                                                                      else ""),
                                          fragility_html(frag, out / "figures"))
@@ -529,22 +527,15 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     return path
 
 
-def _bundled_dir() -> Path:
-    """The folder of the records shipped in the package."""
-    from .scene.records import bundled_records
-
-    return Path(bundled_records()[0]["path"]).parent
-
-
 def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],
                   meta: Mapping[str, dict[str, Any]]) -> pd.DataFrame:
     """``rows`` (record peaks) with the analytic model's sensitivity band of each (record,
     scene, polarity) and where each backend's peak stands against it (columns band_*,
-    within_band; :mod:`rockbench.sensitivity`). ``durations``: run length [s] per record path
+    within_band; :mod:`rockbench.studies.sensitivity`). ``durations``: run length [s] per record path
     (None: the default); ``meta``: dt and units per path of a headerless record."""
-    from .scene import load_scene
-    from .scene.motion import motion_from_spec
-    from .sensitivity import band
+    from ..scene import load_scene
+    from ..scene.motion import motion_from_spec
+    from ..studies.sensitivity import band
 
     out = rows.copy()
     for c in ("band_low", "band_nominal", "band_high", "band_verdict_agreement",
@@ -587,7 +578,7 @@ def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list
         rec_duration = None
         cap = plan.get("record_duration")
         if plan["record_tail"] is not None or cap is not None:
-            from .scene.records import load_record
+            from ..scene.records import load_record
             r = load_record(rec["path"], dt=rec["dt"], units=rec["units"])
             tail = plan["record_tail"] if plan["record_tail"] is not None else 10.0
             rec_duration = float(r.t_end - r.t_start + tail)

@@ -6,7 +6,7 @@ scene is its own base, with the device axes only when it has devices) and runs i
 the analytic reference and every selected engine at its default settings (the ``dt`` axis
 changes the engines' step). Every point of every engine gives a row (:data:`STRESS_COLUMNS`),
 whatever happens: an invalid scene or setting, an exception, a diverged run each become a row
-with its reason. The row's ``class`` (:data:`rockbench.tradeoff.VERDICTS`):
+with its reason. The row's ``class`` (:data:`rockbench.studies.tradeoff.VERDICTS`):
 
 * ``within 1%`` / ``within 5%`` / ``off`` (> 5 %): the error against the analytic reference:
   free rocking: the largest eta error of its impacts; a pulse or record the reference survives:
@@ -39,7 +39,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from .errors import ParameterError
+from ..errors import ParameterError
 from .tradeoff import classify_error
 
 __all__ = ["AXES", "StressPoint", "stress_points", "run_point", "stress", "Stress",
@@ -83,7 +83,7 @@ _FRAME_AXES = ("mass_ratio", "H1/H")
 def base_values(scene=None) -> dict[str, float]:
     """The base point's value on every axis: the scene's alpha [rad], beam / column mass ratio
     and H1/H (frames), 1 on the device axes, dt 1e-3 s, A = 2.5, W = 3 (the base pulse)."""
-    from .scene.scene import load_scene
+    from ..scene.scene import load_scene
 
     sc = load_scene(_BASE if scene is None else scene)
     st = sc.structure
@@ -127,7 +127,7 @@ class StressPoint:
 def _point(axis: str, v: float, base: Any = _BASE, hybrid: Any = _HYBRID) -> StressPoint:
     """The point ``v`` of ``axis`` from the ``base`` scene (the device axes from ``hybrid``, the
     same structure with devices); the overrides scale the scene's own values."""
-    from .scene.scene import load_scene
+    from ..scene.scene import load_scene
 
     pulse = lambda A, W: tuple(sorted({**_PULSE, "A": A, "W": W}.items()))  # noqa: E731
     if axis in ("alpha", "H1/H"):
@@ -168,7 +168,7 @@ def stress_points(full: bool = False, axes: Sequence[str] | None = None, *,
     the device axes start from ``hybrid`` (default: the scene itself when it has tendons and
     dampers, else they do not run), the frame axes run only on a frame; asking for an axis the
     scene cannot have is an error."""
-    from .scene.scene import load_scene
+    from ..scene.scene import load_scene
 
     if scene is None or (scene == _BASE and hybrid in (None, _HYBRID)):
         scene, base, hybrid, label = None, _BASE, _HYBRID, "paper"
@@ -202,8 +202,8 @@ def synthetic_record(length: float, structure, pga_over_uplift: float = 2.0, see
     """A deterministic synthetic accelerogram of ``length`` [s] (dt 0.01 s): band-limited noise
     (0.5-5 Hz) under a 2 s rise, flat strong phase to 40 % of the length and exponential decay,
     scaled to a PGA of ``pga_over_uplift`` x g tan(alpha) (alpha of the taller column)."""
-    from .constants import G
-    from .scene.motion import Record
+    from ..constants import G
+    from ..scene.motion import Record
 
     dt = 0.01
     n = int(round(length / dt)) + 1
@@ -218,13 +218,13 @@ def synthetic_record(length: float, structure, pga_over_uplift: float = 2.0, see
                                               np.exp(-(t - t_strong) / (0.1 * length))))
     a = a * env
     a *= pga_over_uplift * G * math.tan(structure.alpha) / np.max(np.abs(a))
-    return Record(t, a, name=f"synthetic-{length:g}s", source="rockbench.stress")
+    return Record(t, a, name=f"synthetic-{length:g}s", source="rockbench.studies.robustness")
 
 
 def _load(pt: StressPoint):
     """(scene, motion, duration) of a point; raises for an invalid scene."""
-    from .scene.motion import motion_from_spec
-    from .scene.scene import load_scene
+    from ..scene.motion import motion_from_spec
+    from ..scene.scene import load_scene
     from .validation import _free_duration
 
     scene = load_scene(pt.scene, dict(pt.overrides) or None)
@@ -240,7 +240,7 @@ def _load(pt: StressPoint):
     if spec.get("A", 0.0) > 100.0:
         # beyond the A limit of rockbench.limits (a guard against input mistakes): the same
         # pulse given by its amplitude a_g = A g tan(alpha) [m/s^2] and period 2 pi / (W p) [s]
-        from .constants import G
+        from ..constants import G
         A, W = spec.pop("A"), spec.pop("W")
         spec.update(amplitude=A * G * math.tan(scene.alpha), period=2 * math.pi / (W * scene.p))
     motion = motion_from_spec(spec, scene.structure)
@@ -287,8 +287,8 @@ def run_point(item: tuple[str, StressPoint]) -> dict[str, Any]:
     """Run one engine on one point against the analytic reference; never raises."""
     import time
 
-    from .compare import TOLERANCES, metrics
-    from .runner import run
+    from ..compare import TOLERANCES, metrics
+    from ..runner import run
 
     engine, pt = item
     row = _row(engine, pt)
@@ -311,7 +311,7 @@ def run_point(item: tuple[str, StressPoint]) -> dict[str, Any]:
     for k in ("peak_rel_error", "overturned", "overturned_ref", "t_overturn_error",
               "max_sliding", "contact_opened"):
         row[k] = m.get(k)
-    from .analytic.reference import reference_of
+    from ..analytic.reference import reference_of
     eta_ref = reference_of(scene).eta
     imp = res.impacts()
     ratios = [float(e) / float(eta_ref[int(d)]) for e, d in zip(imp["eta"], imp["direction"])
@@ -398,10 +398,10 @@ class Stress:
     unavailable: dict[str, str] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        from .result import _jsonable
+        from ..result import jsonable
 
         recs = self.table.astype(object).where(self.table.notna(), None).to_dict("records")
-        return _jsonable({"full": self.full, "unavailable": self.unavailable,
+        return jsonable({"full": self.full, "unavailable": self.unavailable,
                           "axes": {k: v[0] for k, v in AXES.items()},
                           "breaking_points": breaking_points(self.table).to_dict("records"),
                           "rows": recs, "columns": STRESS_COLUMNS})
@@ -414,9 +414,9 @@ def stress(engines: Sequence[str] | None = None, *, full: bool = False,
     """Run every point (:func:`stress_points` from ``scene``, default the paper's frame; or
     ``points``) with every engine (default: the available engines) through the one executor;
     return a :class:`Stress`."""
-    from .engines import get_backend
-    from .runner import REFERENCE, resolve_engines
-    from .sweep.executors import execute
+    from ..engines import get_backend
+    from ..runner import REFERENCE, resolve_engines
+    from ..sweep.executors import execute
 
     names = [n for n in resolve_engines(engines) if n != REFERENCE]
     unavailable = {}

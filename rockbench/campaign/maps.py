@@ -6,12 +6,12 @@
   hybrid frame, each overlaid on the analytic map of the same cells and run length, with the
   fraction of agreeing cells, Cohen's kappa, the shift of the minimum-overturning boundary
   along A per frequency, and the cells near the analytic boundary (within
-  :data:`rockbench.maps.NEAR_BOUNDARY_MARGIN` in A, where a verdict says little) counted apart.
+  :data:`rockbench.studies.maps.NEAR_BOUNDARY_MARGIN` in A, where a verdict says little) counted apart.
 
 The engine maps take about 40 minutes on 2 cores, four times the report's budget: ``full=True``
 (``rockbench report --full``) measures them into a folder kept with the report
 (``reports/engine-maps``), and the default report reuses each one only after
-:func:`rockbench.maps.reuse_map` has re-run sample cells on the current code and found them
+:func:`rockbench.studies.maps.reuse_map` has re-run sample cells on the current code and found them
 reproduced; otherwise it computes the fast engines on a coarser grid (:data:`ENGINE_GRIDS`) and
 says why. Every map is kept in a resumable store.
 """
@@ -24,13 +24,13 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
-from .maps import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement, mark_near_boundary,
+from ..studies.maps import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement, mark_near_boundary,
                    reuse_map, run_map)
 
 __all__ = ["ANALYTIC_SCENES", "ANALYTIC_GRID", "ENGINE_SCENES", "ENGINE_GRIDS", "run_maps"]
 
 def _paper_maps() -> dict[str, Any]:
-    from .sweep.cases import campaign_plan
+    from ..sweep.cases import campaign_plan
 
     return campaign_plan()["maps"]
 
@@ -49,7 +49,7 @@ ENGINE_AXES = dict(amplitude=_P["engine_amplitude"], frequency=_P["engine_freque
                    pulses="all", tail=_P["engine_tail"])
 #: Grid of the measured engine maps (every engine, both scenes): run by ``full=True``
 #: (``rockbench report --full``) into ``measured`` (``reports/engine-maps``, kept in the
-#: repository), and reused by the default report when :func:`rockbench.maps.reuse_map`
+#: repository), and reused by the default report when :func:`rockbench.studies.maps.reuse_map`
 #: reproduces sample cells of each on the current code.
 MEASURED_GRID = _P["measured_grid"]
 #: Grid per (engine speed class, scene) computed by the default report when no verified
@@ -60,8 +60,8 @@ ENGINE_GRIDS = {"fast": dict(_P["fast_grids"]), "slow": {}}
 def is_fast(engine: str) -> bool:
     """The engine is fast enough for the larger default grids: its backend's ``fast``
     capability (real-time factor >= 20 through rockbench, ``rockbench.engines.base``)."""
-    from .engines import get_backend
-    from .errors import BackendUnavailable
+    from ..engines import get_backend
+    from ..errors import BackendUnavailable
 
     try:
         return bool(get_backend(engine).fast)
@@ -95,19 +95,26 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
         g = (4, 4)
         return (run_map(sc, eng, store=store / f"{lab}_{eng}_4x4.parquet",
                         **dict(axes, grid=g), **run), g, "computed now")
-    mg = tuple(maps["measured_grid"])
-    cells = dict(axes, grid=mg)
     why = "no measured map"
     if measured is not None:
-        path = measured / f"{lab}_{eng}_{mg[0]}x{mg[1]}.parquet"
-        df, why = reuse_map(path, sc, eng, **cells)
-        if df is not None:
-            return df, mg, why
+        # the finest verified map first: the paper's resolution (measured adaptively by
+        # --full), then the plan's measured grid
+        fg, mg = tuple(maps.get("full_grid", maps["measured_grid"])), tuple(maps["measured_grid"])
+        whys = []
+        for g in dict.fromkeys((fg, mg)):
+            path = measured / f"{lab}_{eng}_{g[0]}x{g[1]}.parquet"
+            df, w = reuse_map(path, sc, eng, **dict(axes, grid=g))
+            if df is not None:
+                return df, g, w
+            whys.append(w)
+        why = whys[-1] if len(whys) == 1 else f"{whys[0]}; {whys[1]}"
         if full:
-            if path.exists() and "lacks" not in why:      # stale: measure again
+            path = measured / f"{lab}_{eng}_{fg[0]}x{fg[1]}.parquet"
+            if path.exists() and "lacks" not in whys[0]:      # stale: measure again
                 shutil.rmtree(path)
-            df = run_map(sc, eng, store=path, keyed_by_code=False, **cells, **run)
-            return df, mg, f"measured now ({why})"
+            df = run_map(sc, eng, store=path, keyed_by_code=False, adaptive=fg != mg,
+                         **dict(axes, grid=fg), **run)
+            return df, fg, f"measured now ({whys[0]})"
     g = maps["fast_grids"].get(lab) if is_fast(eng) else None
     if g is None:
         return None, (0, 0), why

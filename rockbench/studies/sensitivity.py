@@ -42,12 +42,12 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from .analytic.reference import reference_of
-from .errors import ParameterError
-from .result import Result
-from .scene.motion import Record
-from .scene.scene import Scene
-from .scene.structure import Frame
+from ..analytic.reference import reference_of
+from ..errors import ParameterError
+from ..result import Result
+from ..scene.motion import Record
+from ..scene.scene import Scene
+from ..scene.structure import Frame
 
 __all__ = ["PERTURBATIONS", "Perturbation", "Band", "Judgement", "band", "perturbed_case",
            "assert_within_band"]
@@ -127,12 +127,12 @@ def _simulate(scene: Scene, motion, *, duration: float | None, phi0: float,
     """One analytic run (history "minimal", ``AnalyticSettings.eta_factor``): the compiled
     path (which applies ``eta_factor`` as the plain solver does) when numba is importable and
     ``compiled``, the plain solver otherwise."""
-    from .analytic import solver
+    from ..analytic import solver
 
     settings = solver.AnalyticSettings(history="minimal", eta_factor=eta_factor)
     if compiled:
         try:
-            from .analytic.compiled import NUMBA_AVAILABLE, simulate_compiled
+            from ..analytic.compiled import NUMBA_AVAILABLE, simulate_compiled
             if NUMBA_AVAILABLE:
                 return simulate_compiled(scene, motion, duration=duration, phi0=phi0,
                                          settings=settings)

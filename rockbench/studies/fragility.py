@@ -23,7 +23,7 @@ Pure functions (plain arrays and frames in, numbers out):
 
 One driver: :func:`run_fragility` builds the cases, runs them through the one executor and the
 one store (:func:`rockbench.sweep.run_cases`: resumable, in parallel, on Dask with a scheduler
-address) and analyses them. The default campaign's part is :mod:`rockbench.campaign_fragility`.
+address) and analyses them. The default campaign's part is :mod:`rockbench.campaign.fragility`.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from .errors import ParameterError
+from ..errors import ParameterError
 
 __all__ = ["MEASURES", "RUN_COLUMNS", "ALPHA", "N_BOOT", "intensity", "parse_scales",
            "resolve_records", "fragility_cases", "fit_lognormal", "fragility_curve",
@@ -116,12 +116,12 @@ def parse_scales(text: Any) -> np.ndarray:
     return np.unique(np.round(values, 12))
 
 
-def _ensemble_dir(name: str) -> Path | None:
+def ensemble_dir(name: str) -> Path | None:
     """The package folder of a bundled ensemble: ``"bundled"`` (the records shipped at the top
     of ``rockbench/records``) or a subfolder of it (e.g. ``sac-la-2in50`` when it is shipped)."""
-    from .scene.records import _bundled_dir
+    from ..scene.records import bundled_dir
 
-    root = _bundled_dir()
+    root = bundled_dir()
     if name == "bundled":
         return root
     sub = root / name
@@ -131,8 +131,8 @@ def _ensemble_dir(name: str) -> Path | None:
 def bundled_ensembles() -> list[str]:
     """Names usable as ``--records NAME``: ``bundled`` and every subfolder of the package's
     ``rockbench/records``."""
-    from .scene.records import _bundled_dir
-    return ["bundled"] + sorted(p.name for p in _bundled_dir().iterdir() if p.is_dir()
+    from ..scene.records import bundled_dir
+    return ["bundled"] + sorted(p.name for p in bundled_dir().iterdir() if p.is_dir()
                                 and not p.name.startswith(("_", ".")))
 
 
@@ -145,7 +145,7 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike]
     returned. Each record a dict name, path,
     dt [s] or None, units or None; ParameterError when a source is none of these or no record
     is found; a name given twice is kept once."""
-    from .scene.records import find_records, listed_metadata
+    from ..scene.records import find_records, listed_metadata
 
     items = [sources] if isinstance(sources, (str, os.PathLike)) else list(sources)
     if not items:
@@ -168,12 +168,12 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike]
                     raise ParameterError("records", str(src), "an .AT2 file, or a headerless "
                                          "file listed with its dt in a records.csv beside it")
                 recs = [{"name": p.stem, "path": str(p.resolve()), **meta}]
-        elif _ensemble_dir(str(src)) is not None:
+        elif ensemble_dir(str(src)) is not None:
             if str(src) == "bundled":
-                recs = [r for r in find_records(_ensemble_dir("bundled"))[0]
-                        if Path(r["path"]).parent == _ensemble_dir("bundled")]
+                recs = [r for r in find_records(ensemble_dir("bundled"))[0]
+                        if Path(r["path"]).parent == ensemble_dir("bundled")]
             else:
-                recs = find_records(_ensemble_dir(str(src)))[0]
+                recs = find_records(ensemble_dir(str(src)))[0]
         else:
             top = top or ", ".join(bundled_ensembles())
             raise ParameterError("records", str(src), f"an existing folder or record file, or "
@@ -186,9 +186,9 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike]
     return list(out.values())
 
 
-def _record_ims(records: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
+def record_ims(records: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
     """name, path, pga [m/s^2], pgv [m/s], duration [s] of each record (loaded once)."""
-    from .scene.records import load_record
+    from ..scene.records import load_record
 
     rows = []
     for r in records:
@@ -506,7 +506,7 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
                            "reference": reference, "n_boot": n_boot, "seed": seed,
                            "level": 1 - ALPHA, "grid": grid.tolist(), "backends": {}}
     ref = ok[ok["backend"] == reference]
-    from .engines.base import EngineSettings      # below uplift_tol: not uplifted
+    from ..engines.base import EngineSettings      # below uplift_tol: not uplifted
     floor = EngineSettings.uplift_tol
     for b in backends:
         g = runs[runs["backend"] == b]
@@ -605,9 +605,9 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     stored with status "error"). ``executor``: "process" (default; ``workers`` processes),
     "serial", or "dask" (implied by ``scheduler``, a running scheduler's address).
     """
-    from .runner import REFERENCE, resolve_engines
-    from .sweep import run_cases
-    from .sweep import store as S
+    from ..runner import REFERENCE, resolve_engines
+    from ..sweep import run_cases
+    from ..sweep import store as S
 
     if measure not in MEASURES:
         raise ParameterError("intensity", measure, f"one of {', '.join(MEASURES)}")
@@ -615,7 +615,7 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     names = resolve_engines(engines, name="engine")
     names = [REFERENCE] + [n for n in names if n != REFERENCE]
     recs = resolve_records(records)
-    ims = _record_ims(recs)
+    ims = record_ims(recs)
     cases = fragility_cases(scene, recs, [REFERENCE], ladder, settings=settings,
                             overrides=overrides)
     e_ladder = parse_scales(engine_scales) if engine_scales is not None else ladder

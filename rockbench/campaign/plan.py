@@ -32,7 +32,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, Sequence
 
-from .errors import ParameterError, SceneError
+from ..errors import ParameterError, SceneError
 
 __all__ = ["plan_for_scenes", "load_plan", "scene_refs"]
 
@@ -43,7 +43,7 @@ def scene_refs(scenes: Sequence[Any], folder: str | os.PathLike) -> list[str]:
     """Scene arguments as strings a worker process can load: built-in names and TOML paths as
     they are (paths made absolute), :class:`~rockbench.scene.scene.Scene` objects saved as
     ``folder/<name>.toml``. Every scene is loaded once here, so a bad one fails now."""
-    from .scene.scene import Scene, load_scene, save_scene
+    from ..scene.scene import Scene, load_scene, save_scene
 
     out: list[str] = []
     for s in scenes:
@@ -67,14 +67,14 @@ def scene_refs(scenes: Sequence[Any], folder: str | os.PathLike) -> list[str]:
 
 
 def _label(ref: str) -> str:
-    from .campaign_maps import scene_label
+    from .maps import scene_label
 
     return scene_label(ref)
 
 
 def _thresholds(scene, W: float) -> float:
     """The smallest analytic overturning A of the four Ricker pulses at ``W``."""
-    from .validation import overturn_threshold
+    from ..studies.validation import overturn_threshold
 
     return min(overturn_threshold(scene, W, shape, sign, rtol=1e-2) for shape, sign in _SHAPES)
 
@@ -82,8 +82,8 @@ def _thresholds(scene, W: float) -> float:
 def _fracture_case(ref: str, scene) -> tuple | None:
     """(scene, shape, sign, A, W) of the smallest A at which the analytic model fractures the
     scene's devices under an antisymmetric + pulse at W = 3, or None."""
-    from .runner import run
-    from .scene.motion import RickerPulse
+    from ..runner import run
+    from ..scene.motion import RickerPulse
 
     dev = scene.devices
     if dev is None or getattr(dev, "fracture_strain", None) in (None, math.inf):
@@ -104,9 +104,9 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
     structure the decision is about), derived as the module docstring says. ``quick``: the
     quick form (one pulse, a 2-point map, two time steps, one record, no fracture cases).
     ``folder``: where Scene objects are saved for the worker processes."""
-    from .scene.scene import load_scene
-    from .sweep.cases import campaign_plan
-    from .validation import uplift_threshold
+    from ..scene.scene import load_scene
+    from ..sweep.cases import campaign_plan
+    from ..studies.validation import uplift_threshold
 
     if not scenes:
         raise ParameterError("scenes", "none", "at least one scene")
@@ -156,7 +156,7 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
                  "analytic_grid": (100, 100), "analytic_amplitude": f"0.5:{hi:g}",
                  "analytic_frequency": "0.5:10", "engine_scenes": (first,),
                  "engine_amplitude": f"1:{hi:g}", "engine_frequency": "1:10",
-                 "engine_tail": 3.0, "measured_grid": (12, 12),
+                 "engine_tail": 3.0, "measured_grid": (12, 12), "full_grid": (100, 100),
                  "fast_grids": {_label(first): (6, 6)}},
     })
     return plan
@@ -167,7 +167,7 @@ def load_plan(path: str | os.PathLike, *, quick: bool = False,
     """A plan file (``kind = "campaign-plan"``; keys as in ``scenarios/paper-plan.toml``, in a
     ``[campaign]`` table or at the top level). ``scenes`` is required; every other key left
     out is derived from the scenes (:func:`plan_for_scenes`)."""
-    from .sweep.cases import read_plan
+    from ..sweep.cases import read_plan
 
     p = Path(path)
     try:

@@ -1,7 +1,7 @@
 """Work-precision: how accurate each engine is on a scene, at each setting, and at what cost.
 
 :func:`tradeoff` runs a fixed **validation set** of a scene
-(:func:`rockbench.validation.validation_set`, re-exported here) with every selected engine at
+(:func:`rockbench.studies.validation.validation_set`, re-exported here) with every selected engine at
 every setting (by default the time steps :data:`DEFAULT_DTS`), with
 repeats, and measures
 
@@ -46,7 +46,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
-from .errors import ParameterError
+from ..errors import ParameterError
 from .tradeoff_tables import (RUN_COLUMNS, TABLE_COLUMNS, VERDICTS, Tradeoff, runs_frame,
                               add_self_consistency, case_error, classify_error, machine_info,
                               precision_sweeps, summarize)
@@ -81,7 +81,7 @@ class Setting:
 
     @property
     def dt(self) -> float:
-        from .engines import get_backend
+        from ..engines import get_backend
 
         d = dict(self.overrides)
         if "dt" in d:
@@ -184,7 +184,7 @@ def _reference(key: str, case: ValidationCase):
 
 @functools.lru_cache(maxsize=64)
 def _band(key: str, case: ValidationCase):
-    """The analytic model's own sensitivity band of a record case (:mod:`rockbench.sensitivity`)."""
+    """The analytic model's own sensitivity band of a record case (:mod:`rockbench.studies.sensitivity`)."""
     from .sensitivity import band
 
     sc, motion = case.load(_scene_from_key(key))
@@ -202,7 +202,7 @@ def _warm(setting: "Setting", scene, over: dict[str, Any]) -> float:
     """Run one short case of ``setting`` on ``scene`` before anything is timed, once per process
     (the one-off costs: imports, numba's compile of the stepping loop, the engine's first-run
     allocations). Returns its CPU time [s] the first time, NaN after."""
-    from .runner import run
+    from ..runner import run
 
     k = (setting.engine, setting.label)
     if k in _WARMED:
@@ -220,7 +220,7 @@ def _warm(setting: "Setting", scene, over: dict[str, Any]) -> float:
 def _build_cpu(setting: "Setting", scene, phi0: float, over: dict[str, Any]) -> float:
     """CPU time [s] of building the engine's model of ``scene`` (a one-off cost per run,
     measured apart: :meth:`EngineBackend.build` then release), or 0 for a backend without one."""
-    from .engines import get_backend
+    from ..engines import get_backend
 
     cls = get_backend(setting.engine)
     if not hasattr(cls, "build"):
@@ -240,7 +240,7 @@ def _build_cpu(setting: "Setting", scene, phi0: float, over: dict[str, Any]) -> 
 def _run_overrides(setting: Setting) -> dict[str, Any]:
     """The setting's overrides, with ``output_dt`` raised to dt when dt exceeds the engine's
     default output interval (1 ms): histories stay sampled at 1 ms or at every step."""
-    from .engines import get_backend
+    from ..engines import get_backend
 
     over = dict(setting.overrides)
     if "output_dt" not in over:
@@ -256,8 +256,8 @@ def _run_item(item: dict[str, Any]) -> dict[str, Any]:
     the steady-state part of every repeat, the model build and the process's one-off warm-up
     apart) and the thinned history (t, phi) for self-consistency.
     Never raises for a failure of the run: it becomes status "error"."""
-    from .compare import metrics
-    from .runner import run
+    from ..compare import metrics
+    from ..runner import run
 
     case: ValidationCase = item["case"]
     setting: Setting = item["setting"]
@@ -311,7 +311,7 @@ def _crashed(item: dict[str, Any], reason: str) -> dict[str, Any]:
 # The store
 # =========================================================================================
 def _item_key(item: dict[str, Any]) -> str:
-    from .sweep.store import code_fingerprint, key
+    from ..sweep.store import code_fingerprint, key
 
     s, c = item["setting"], item["case"]
     return key({"scene": item["scene"], "case": c.physics(), "engine": s.engine,
@@ -320,13 +320,13 @@ def _item_key(item: dict[str, Any]) -> str:
 
 
 def _store_dir(store) -> Path:
-    from .sweep.store import code_fingerprint, store_dir
+    from ..sweep.store import code_fingerprint, store_dir
 
     return store_dir(store) / code_fingerprint() / "tradeoff"
 
 
 def _load_stored(directory: Path, k: str) -> dict[str, Any] | None:
-    from .sweep.store import load_payload
+    from ..sweep.store import load_payload
 
     return load_payload(directory, k)
 
@@ -361,9 +361,9 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
     exact : override sets run as they are, instead of the grid of ``dts`` x ``settings``
         (each for every engine; without dt an engine runs at its default step).
     """
-    from .runner import REFERENCE, resolve_engines
-    from .scene.scene import load_scene
-    from .sweep.executors import execute
+    from ..runner import REFERENCE, resolve_engines
+    from ..scene.scene import load_scene
+    from ..sweep.executors import execute
 
     scene = load_scene(scene)          # a name, a file or a Scene: the one resolver
     if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
@@ -371,7 +371,7 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
     if self_consistency not in ("grid", "run", "none"):
         raise ParameterError("self_consistency", self_consistency, "grid, run or none")
     names = [n for n in resolve_engines(engines) if n != REFERENCE]
-    from .engines import get_backend
+    from ..engines import get_backend
 
     unavailable: dict[str, str] = {}
     usable = []
@@ -413,7 +413,7 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
     def on_result(k: str, row: dict[str, Any]) -> None:
         done[k] = row
         if directory is not None and row.get("status") != "error":
-            from .sweep.store import write_payload
+            from ..sweep.store import write_payload
             write_payload(directory, k, row)
 
     # TODO(pymunk/mujoco threads): every engine here steps on one thread.

@@ -1,21 +1,175 @@
-"""The command line's inputs: options -> scene, ground motion and backend settings, validated,
-every error naming the option (a :class:`rockbench.errors.ParameterError`, printed by
-:mod:`rockbench.cli` as one line). Options and commands are in :mod:`rockbench.cli`.
+"""What every command of the command line shares, in one place: the argument types, the scene,
+motion and run options, the one grammar of ``--engine`` (repeatable), ``--setting
+ENGINE.KEY=VALUE`` and ``--quiet``; what the options mean once parsed (scene, ground motion and
+backend settings, validated, every error naming the option: a
+:class:`rockbench.errors.ParameterError`, printed by :func:`rockbench.cli.main.main` as one
+line); and the output helpers (JSON, folders, atomic CSV writes). Commands live in
+:mod:`rockbench.cli.main` and one module per group (:mod:`.choosing`, :mod:`.maps`,
+:mod:`.fragility`).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
+import math
+import os
 from pathlib import Path
 from typing import Any
 
-from .errors import ParameterError, RecordError, RockbenchError
+from ..errors import ParameterError, RecordError, RockbenchError
 
-__all__ = ["MissingOption", "scene_overrides", "load_scene_from", "setting_value",
+__all__ = ["CommandLineError", "Parser", "add_setting_option", "add_engine_option",
+           "add_quiet_option", "add_scene_options", "add_motion_options", "add_run_options",
+           "arg_number", "arg_positive", "arg_nonzero", "arg_count", "arg_sign", "arg_key_value",
+           "arg_names", "MissingOption", "scene_overrides", "load_scene_from", "setting_value",
            "parse_settings", "engine_settings", "backend_overrides", "motion_from",
-           "engine_names"]
+           "engine_names", "print_json", "output_folder", "write_atomic", "pandas_display"]
 
+
+# ==========================================================================================
+# Options
+# ==========================================================================================
+
+class CommandLineError(Exception):
+    """An argument the parser rejects (printed as one line, exit code 2)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors raise instead of printing the usage and exiting, so that
+    :func:`main` prints exactly one line."""
+
+    def error(self, message: str):  # type: ignore[override]
+        raise CommandLineError(message)
+
+
+def arg_number(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(x):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return x
+
+
+def arg_positive(text: str) -> float:
+    x = arg_number(text)
+    if x <= 0.0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return x
+
+
+def arg_nonzero(text: str) -> float:
+    x = arg_number(text)
+    if x == 0.0:
+        raise argparse.ArgumentTypeError(f"must be non-zero, got {text!r}")
+    return x
+
+
+def arg_count(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}")
+    return n
+
+
+def arg_sign(text: str) -> int:
+    try:
+        s = int(text)
+    except ValueError:
+        s = 0
+    if s not in (1, -1):
+        raise argparse.ArgumentTypeError(f"must be 1 or -1, got {text!r}")
+    return s
+
+
+def arg_key_value(text: str) -> tuple[str, str]:
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    return key.strip(), value.strip()
+
+
+def arg_names(text: str) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list of names, got {text!r}")
+    return names
+
+
+def add_scene_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", metavar="SCENE",
+                   help="a built-in scene name (rockbench scenes) or a path to a .toml file")
+    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=arg_key_value,
+                   action="append", default=[],
+                   help="override a scene parameter (e.g. span=9, devices.fracture_strain=none)")
+
+
+def add_motion_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("ground motion (one of --pulse, --record, --phi0)")
+    x = g.add_mutually_exclusive_group()
+    x.add_argument("--pulse", choices=("symmetric", "antisymmetric"),
+                   help="Ricker pulse shape (paper Eq. 29 / Eq. 30)")
+    x.add_argument("--record", metavar="FILE",
+                   help="accelerogram: a PEER .AT2 file or a headerless column file")
+    x.add_argument("--phi0", type=arg_nonzero, metavar="RAD",
+                   help="free rocking from phi0 = RAD radians (!= 0, + counterclockwise), "
+                        "as rockbench.run(phi0=...)")
+    x.add_argument("--phi0-alpha", type=arg_nonzero, metavar="X",
+                   help="free rocking from phi0 = X alpha (X != 0, + counterclockwise)")
+    g.add_argument("--sign", type=arg_sign, default=None, metavar="{1,-1}",
+                   help="pulse sign (default 1: the pulse as printed in the paper)")
+    g.add_argument("--amplitude", type=arg_positive, metavar="A",
+                   help="pulse amplitude A = a_g / (g tan alpha) > 0")
+    g.add_argument("--frequency", type=arg_positive, metavar="W",
+                   help="pulse frequency W = omega_g / p > 0")
+    g.add_argument("--record-dt", type=arg_positive, metavar="S",
+                   help="time step [s] of a headerless record file")
+    g.add_argument("--record-units", metavar="UNITS",
+                   help="units of a headerless record file: g, m/s2, cm/s2 (a records.csv "
+                        "beside the file gives them, and its dt, when it lists the file)")
+    g.add_argument("--scale", type=arg_nonzero, metavar="F",
+                   help="multiply the record by F (default 1)")
+
+
+def add_run_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--duration", type=arg_positive, metavar="S",
+                   help="simulated time [s] from the motion's start (default: motion + 10 s)")
+    p.add_argument("--dt", type=arg_positive, metavar="S",
+                   help="engine time step [s] (engines only: the analytic model has none)")
+    add_setting_option(p)
+
+
+def add_setting_option(p: argparse.ArgumentParser, what: str = "set") -> None:
+    """``--setting ENGINE.KEY=VALUE`` (repeatable): the one settings grammar of every command
+    (:func:`rockbench.cli.common.parse_settings`)."""
+    p.add_argument("--setting", dest="settings", metavar="ENGINE.KEY=VALUE", action="append",
+                   default=[], help=f"{what} a field of an engine's Settings, e.g. "
+                   "pymunk.iterations=20 (bare KEY=VALUE when one engine is selected); "
+                   "repeatable")
+
+
+def add_engine_option(p: argparse.ArgumentParser, default: str) -> None:
+    """``--engine NAME`` (repeatable; a comma-separated list works too; ``--engines`` is the
+    same option): the engines of a command that runs several."""
+    p.add_argument("--engine", "--engines", dest="engine", metavar="NAME", action="append",
+                   help=f"an engine (rockbench engines); repeat for several, e.g. --engine "
+                        f"pymunk --engine mujoco (default: {default})")
+
+
+def add_quiet_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress on stderr (errors still print)")
+
+
+# ==========================================================================================
+# Inputs
+# ==========================================================================================
 
 class MissingOption(ParameterError):
     """A required option is missing (a :class:`ParameterError` with a plainer message)."""
@@ -41,7 +195,7 @@ def scene_overrides(pairs: list[tuple[str, str]]) -> dict[str, Any]:
 
 
 def load_scene_from(args: argparse.Namespace):
-    from .scene import load_scene
+    from ..scene import load_scene
 
     return load_scene(args.scene, scene_overrides(args.overrides))
 
@@ -81,7 +235,7 @@ def setting_value(cls: type, name: str, raw: str, shown: str | None = None) -> A
 
 
 def _settings_class(engine: str):
-    from .engines import get_backend
+    from ..engines import get_backend
 
     return get_backend(engine).Settings
 
@@ -93,7 +247,7 @@ def parse_settings(texts: list[str], engines: list[str], *, option: str = "--set
     ``[(engine, key, raw value), ...]``. ``ENGINE`` must be one of ``engines`` or ``also`` (e.g.
     the analytic reference of ``compare``), ``KEY`` a field of its Settings; errors are
     :class:`ParameterError` lines showing the right form."""
-    from .engines import REGISTRY
+    from ..engines import REGISTRY
 
     selectable = list(dict.fromkeys([*engines, *also]))
     out = []
@@ -179,7 +333,7 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
                 raise ParameterError(opt, v, "given only with --record")
 
     if args.pulse is not None:
-        from .scene import RickerPulse
+        from ..scene import RickerPulse
 
         for opt, what in (("--amplitude", "A = a_g / (g tan alpha) > 0"),
                           ("--frequency", "W = omega_g / p > 0")):
@@ -198,14 +352,14 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
         return pulse, 0.0
 
     if args.record is not None:
-        from .scene import load_record
+        from ..scene import load_record
 
         path = Path(args.record)
         if not path.is_file():
             raise RecordError(f"--record: file {str(path)!r} does not exist")
         listed = None
         if path.suffix.lower() != ".at2" and (args.record_dt is None or args.record_units is None):
-            from .scene.records import listed_metadata
+            from ..scene.records import listed_metadata
 
             listed = listed_metadata(path)      # dt and units from the records.csv beside it
         if path.suffix.lower() != ".at2" and listed is None:
@@ -248,9 +402,61 @@ def engine_names(args: argparse.Namespace, option: str = "--engine") -> list[str
     given = getattr(args, "engine", None)
     if not given:
         return None
-    from .runner import resolve_engines
+    from ..runner import resolve_engines
 
     names = [n.strip() for v in given for n in v.split(",") if n.strip()]
     if not names:
         raise ParameterError(option, ",".join(given), "backend names")
     return resolve_engines(names, name=option)
+
+
+# ==========================================================================================
+# Output
+# ==========================================================================================
+def print_json(data: Any) -> None:
+    from ..result import jsonable
+
+    print(json.dumps(jsonable(data), indent=2, allow_nan=False))
+
+
+def output_folder(path: Path, option: str) -> None:
+    """Create the folder of output ``path`` (given with ``option``) now, before any run, and
+    check it can be written: a one-line error naming the option otherwise."""
+    folder = path.parent
+    try:
+        if path.is_dir():
+            raise RockbenchError(f"cannot write {option} {path}: it is a folder")
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise RockbenchError(f"cannot write {option} {path}: {e.strerror or e}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise RockbenchError(f"cannot write {option} {path}: folder {folder} is not writable")
+
+
+def write_atomic(files: dict[Path, Any], option: str) -> None:
+    """Write each DataFrame of ``files`` {path: frame} as CSV to a temporary name beside it,
+    then rename them all into place: either every file is complete or none is changed (and no
+    temporary file is left). Failures are one-line errors naming ``option``."""
+    tmps: dict[Path, Path] = {}
+    try:
+        for path, frame in files.items():
+            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+            tmps[path] = tmp
+            frame.to_csv(tmp, index=False)
+        for path, tmp in tmps.items():
+            os.replace(tmp, path)
+    except OSError as e:
+        raise RockbenchError(f"cannot write {option} {next(iter(files))}: "
+                             f"{e.strerror or e}") from None
+    finally:
+        for tmp in tmps.values():
+            try:
+                tmp.unlink()
+            except OSError:
+                pass
+
+
+def pandas_display():
+    import pandas as pd
+
+    return pd.option_context("display.width", 200, "display.max_columns", 50)

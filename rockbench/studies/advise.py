@@ -2,7 +2,7 @@
 one part of the scene's evidence and confirmed on another.
 
 :func:`advise` answers from measurements on the user's scene (a built-in name, a scene file or a
-:class:`~rockbench.scene.scene.Scene`). The evidence (:func:`rockbench.validation.validation_set`:
+:class:`~rockbench.scene.scene.Scene`). The evidence (:func:`rockbench.studies.validation.validation_set`:
 free rocking from small and large angles, pulse cells over the scene's whole A-W plane, near and
 away from its overturning boundary, scaled records) is split, deterministically, into a
 **choice** part and a **held-out** part. For every engine:
@@ -10,7 +10,7 @@ away from its overturning boundary, scaled records) is split, deterministically,
 1. **choose**: the engine's precision knob (the time step ``dt``, or what its backend class
    declares as its first ``precision_sweeps`` curve) is run from the coarsest
    value down on the choice part; the worst validation error of each
-   (:func:`rockbench.tradeoff.case_error`) is recorded;
+   (:func:`rockbench.studies.tradeoff.case_error`) is recorded;
 2. **converge** (:func:`convergence`): a value is accepted only when the next finer one also
    meets the tolerance and the error falls as the step falls (or the two agree with each
    other within a quarter of the tolerance: converged); a lucky step - within the tolerance
@@ -28,7 +28,7 @@ tolerance wins whatever its contact parameters.
 
 **Cost** is steady-state process CPU seconds per simulated second (the model build of every
 run and each process's one-off warm-up measured apart and shown beside it, never ranked):
-:mod:`rockbench.tradeoff`. Engines are ranked by it; those within :data:`TIE` of the cheapest
+:mod:`rockbench.studies.tradeoff`. Engines are ranked by it; those within :data:`TIE` of the cheapest
 are a tie. :func:`decide` is the pure part (a tradeoff table and a tolerance in, the ranking
 out), so the rule is tested on controlled tables and the report turns any tradeoff table into
 advice (:func:`advice_for_report`). Runs are reused through the one store (``store``).
@@ -43,7 +43,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from .errors import ParameterError
+from ..errors import ParameterError
 
 __all__ = ["ADVISE_DTS", "QUICK_DTS", "CONTACT_VARIANTS", "Advice", "advise", "decide",
            "convergence", "held_out_stats", "advice_for_report", "precision_knob",
@@ -90,7 +90,7 @@ _EVIDENCE = ["engine", "setting", "dt", "worst_error_choice", "worst_error_heldo
 
 def precision_knob(engine: str) -> tuple[str, tuple[float, ...]]:
     """(name, values from coarse to fine) of ``engine``'s precision knob: the first of its
-    work-precision curves (:func:`rockbench.tradeoff.precision_sweeps`, the backend class's
+    work-precision curves (:func:`rockbench.studies.tradeoff.precision_sweeps`, the backend class's
     ``precision_sweeps``) that sweeps its own knob with its own values (e.g. an
     error-controlled integrator's accuracy), else ``("dt", ADVISE_DTS)``."""
     from .tradeoff import precision_sweeps
@@ -149,7 +149,7 @@ def convergence(errors: Sequence[tuple[float, float]], tolerance: float) -> dict
 
 
 def held_out_stats(runs: pd.DataFrame, tolerance: float) -> dict[str, Any]:
-    """On the held-out runs of one setting (rows of :data:`rockbench.tradeoff.RUN_COLUMNS`):
+    """On the held-out runs of one setting (rows of :data:`rockbench.studies.tradeoff.RUN_COLUMNS`):
     ``n`` (counted runs), ``beyond`` (fraction of them with error > tolerance), ``beyond2``
     (count with error > 2 x tolerance), ``wrong_verdicts`` (away from the boundary, or not ok),
     ``near_disagree`` (near the boundary: reported, not counted), ``outside_band`` (records)."""
@@ -192,7 +192,7 @@ def _num(x: Any) -> float:
 def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | None = None,
            unavailable: dict[str, str] | None = None, knobs: dict[str, str] | None = None
            ) -> list[dict[str, Any]]:
-    """The ranking of :class:`Advice` from a tradeoff table (:data:`rockbench.tradeoff.
+    """The ranking of :class:`Advice` from a tradeoff table (:data:`rockbench.studies.tradeoff.
     TABLE_COLUMNS`: at least engine, setting, dt, worst_error [, worst_error_choice,
     worst_error_heldout], cpu_per_sim_s, real_time_factor).
 
@@ -349,7 +349,7 @@ class Advice:
         return self.ranking[0] if self.ranking and self.ranking[0]["meets"] else None
 
     def to_json(self) -> dict[str, Any]:
-        from .result import _jsonable
+        from ..result import jsonable
 
         ev = self.evidence[[c for c in _EVIDENCE if c in self.evidence.columns]]
 
@@ -358,7 +358,7 @@ class Advice:
                      for k, v in r.items()} for r in rows]
 
         rec = self.recommended
-        return _jsonable({
+        return jsonable({
             "scene": self.scene, "tolerance": self.tolerance, "size": self.size,
             "quick": self.quick,
             "recommended": None if rec is None else clean([rec])[0],
@@ -502,11 +502,11 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
     full : the full evidence and the contact-parameter search.
     contact : search the contact parameters (default: ``full``).
     repeat : runs of each case for the cost (default 3; quick: 1).
-    seed : the split's seed (default :data:`rockbench.validation.SEED`).
+    seed : the split's seed (default :data:`rockbench.studies.validation.SEED`).
     """
-    from .engines import REGISTRY, get_backend
-    from .runner import REFERENCE, resolve_engines
-    from .scene.scene import load_scene
+    from ..engines import REGISTRY, get_backend
+    from ..runner import REFERENCE, resolve_engines
+    from ..scene.scene import load_scene
     from .tradeoff import machine_info, summarize, tradeoff, validation_set
     from .validation import SEED
 

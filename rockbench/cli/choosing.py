@@ -1,7 +1,7 @@
 """The command-line commands of issue 13 (``docs/choosing.md``): ``rockbench tradeoff``,
 ``rockbench advise`` and ``rockbench stress`` - their arguments (:func:`add_choosing_commands`,
-called by :func:`rockbench.cli.build_parser`) and their commands (``cmd_*``, dispatched by
-:data:`rockbench.cli.COMMANDS`). Errors follow :mod:`rockbench.cli`: one line, exit code 2.
+called by :func:`rockbench.cli.main.build_parser`) and their commands (``cmd_*``, dispatched by
+:data:`rockbench.cli.main.COMMANDS`). Errors follow :mod:`rockbench.cli.main`: one line, exit code 2.
 """
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-from .errors import ParameterError
+from ..errors import ParameterError
 
-from .cli_input import engine_names, engine_settings, load_scene_from
+from .common import engine_names, engine_settings, load_scene_from
 
 __all__ = ["add_choosing_commands", "cmd_tradeoff", "cmd_advise", "cmd_stress"]
 
@@ -31,12 +31,12 @@ def _dts(text: str) -> list[float]:
 
 def add_choosing_commands(sub) -> None:
     """tradeoff, advise and stress (issue 13; docs/choosing.md)."""
-    from .cli import (_add_scene_options, _count, _names, _positive, add_engine_option,
+    from .common import (add_scene_options, arg_count, arg_names, arg_positive, add_engine_option,
                       add_quiet_option)
 
     p = sub.add_parser("tradeoff", help="work-precision of every engine and setting on a scene "
                        "(error against the analytic model vs CPU cost)")
-    _add_scene_options(p)
+    add_scene_options(p)
     add_engine_option(p, "every available one")
     p.add_argument("--dt", type=_dts, metavar="S,S,...",
                    help="time steps [s] (default 4e-3,2e-3,1e-3,5e-4,2.5e-4,1e-4)")
@@ -45,10 +45,10 @@ def add_choosing_commands(sub) -> None:
                    help="an extra setting swept at every dt, e.g. pymunk.iterations=60 (one "
                         "engine's fields, comma-separated, make one setting; bare KEY=VALUE "
                         "when one engine is selected); repeatable")
-    p.add_argument("--repeat", type=_count, default=3, metavar="N",
+    p.add_argument("--repeat", type=arg_count, default=3, metavar="N",
                    help="runs of each case; cost = median CPU time (default 3)")
     p.add_argument("--quick", action="store_true", help="the reduced validation set")
-    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")
     p.add_argument("--store", metavar="PATH", help="result store folder (reused on a rerun)")
     p.add_argument("--out", metavar="DIR",
                    help="write tradeoff.csv, tradeoff_runs.csv and work_precision.png")
@@ -56,8 +56,8 @@ def add_choosing_commands(sub) -> None:
     add_quiet_option(p)
 
     p = sub.add_parser("advise", help="the cheapest setting of each engine within a tolerance")
-    _add_scene_options(p)
-    p.add_argument("--tolerance", type=_positive, required=True, metavar="X",
+    add_scene_options(p)
+    p.add_argument("--tolerance", type=arg_positive, required=True, metavar="X",
                    help="relative bound on the worst validation error (0.02 = 2 %%)")
     add_engine_option(p, "every registered engine")
     p.add_argument("--quick", action="store_true",
@@ -66,7 +66,7 @@ def add_choosing_commands(sub) -> None:
     p.add_argument("--full", action="store_true",
                    help="the full evidence and the search of the contact parameters (slow)")
     p.add_argument("--store", metavar="PATH", help="result store folder (reused on a rerun)")
-    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")
     p.add_argument("--json", action="store_true", help="print the advice as JSON")
     add_quiet_option(p)
 
@@ -76,8 +76,8 @@ def add_choosing_commands(sub) -> None:
                         "paper's asymmetric frame, its device axes from the hybrid one)")
     add_engine_option(p, "every available one")
     p.add_argument("--full", action="store_true", help="the whole ranges (slow)")
-    p.add_argument("--axes", type=_names, metavar="A,B,...", help="only these axes")
-    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--axes", type=arg_names, metavar="A,B,...", help="only these axes")
+    p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")
     p.add_argument("--out", metavar="DIR",
                    help="write stress.csv and one stability map per engine (PNG)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
@@ -88,7 +88,7 @@ def _swept_settings(texts: list[str], engines: list[str]) -> list[dict[str, Any]
     """tradeoff's ``--setting`` values, each one extra setting swept at every dt: one engine's
     ``ENGINE.KEY=VALUE`` fields, comma-separated, in the one grammar; validated here (a bad
     key or value exits 2 before anything runs) -> dicts with the engine under ``__engine__``
-    (:func:`rockbench.tradeoff.settings_grid`)."""
+    (:func:`rockbench.studies.tradeoff.settings_grid`)."""
     out = []
     for text in texts:
         parts = [t.strip() for t in text.split(",") if t.strip()]
@@ -118,33 +118,33 @@ def _png(fig, path: Path) -> None:
 
 
 def cmd_tradeoff(args: argparse.Namespace) -> int:
-    from .cli import _output_folder, _pandas_display, _print_json, _write_atomic
-    from .report.tradeoff_figures import plot_work_precision
-    from .runner import resolve_engines
-    from .tradeoff import tradeoff
+    from .common import output_folder, pandas_display, print_json, write_atomic
+    from ..report.tradeoff_figures import plot_work_precision
+    from ..runner import resolve_engines
+    from ..studies.tradeoff import tradeoff
 
     scene = load_scene_from(args)
     engines = engine_names(args)
     extra = _swept_settings(args.settings, [e for e in engines or resolve_engines(None)
                                             if e != "analytic"])
     if args.out:
-        _output_folder(Path(args.out) / "tradeoff.csv", "--out")
+        output_folder(Path(args.out) / "tradeoff.csv", "--out")
     t = tradeoff(scene, engines, dts=args.dt, settings=extra, repeat=args.repeat,
                  quick=args.quick, store=args.store, progress=not args.quiet,
                  **_executor(args))
     if args.out:
         out = Path(args.out)
-        _write_atomic({out / "tradeoff.csv": t.table,
+        write_atomic({out / "tradeoff.csv": t.table,
                        out / "tradeoff_runs.csv": t.runs.drop(columns=["_cpu"])}, "--out")
         _png(plot_work_precision(t.table, title=f"{scene.name}: work-precision"),
              Path(args.out) / "work_precision.png")
     if args.json:
-        _print_json(t.to_json())
+        print_json(t.to_json())
         return 0
     cols = ["engine", "setting", "worst_error", "verdict", "peak_error_worst",
             "peak_error_median", "nrmse_worst", "eta_error_worst", "verdicts_agree",
             "self_peak_error_worst", "cpu_per_sim_s", "real_time_factor"]
-    with _pandas_display():
+    with pandas_display():
         print(t.table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     print("units: errors relative [-]; cpu_per_sim_s: process CPU s per simulated s "
           "(median of repeats); real_time_factor: simulated s per CPU s")
@@ -156,8 +156,8 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
 
 
 def cmd_advise(args: argparse.Namespace) -> int:
-    from .advise import advise
-    from .cli import _print_json
+    from ..studies.advise import advise
+    from .common import print_json
 
     scene = load_scene_from(args)
     full = bool(getattr(args, "full", False))   # --full: the full evidence, contact search
@@ -166,35 +166,35 @@ def cmd_advise(args: argparse.Namespace) -> int:
     a = advise(scene, args.tolerance, engine_names(args), args.store, quick=args.quick,
                full=full, progress=not args.quiet, **_executor(args))
     if args.json:
-        _print_json(a.to_json())
+        print_json(a.to_json())
     else:
         print(a.text())
     return 0
 
 
 def cmd_stress(args: argparse.Namespace) -> int:
-    from .cli import _output_folder, _pandas_display, _print_json, _write_atomic
-    from .report.tradeoff_figures import plot_stability_map
-    from .stress import breaking_points, stress
+    from .common import output_folder, pandas_display, print_json, write_atomic
+    from ..report.tradeoff_figures import plot_stability_map
+    from ..studies.robustness import breaking_points, stress
 
     engines = engine_names(args)
     if args.out:
-        _output_folder(Path(args.out) / "stress.csv", "--out")
+        output_folder(Path(args.out) / "stress.csv", "--out")
     scene = getattr(args, "scene", None)
     if scene is not None:
-        from .scene.scene import load_scene
+        from ..scene.scene import load_scene
         load_scene(scene)                    # a bad scene fails before anything runs
     s = stress(engines, full=args.full, axes=args.axes, progress=not args.quiet,
                scene=scene, **_executor(args))
     if args.out:
-        _write_atomic({Path(args.out) / "stress.csv": s.table}, "--out")
+        write_atomic({Path(args.out) / "stress.csv": s.table}, "--out")
         for eng in dict.fromkeys(s.table["engine"]):
             _png(plot_stability_map(s.table, eng), Path(args.out) / f"stability_{eng}.png")
     if args.json:
-        _print_json(s.to_json())
+        print_json(s.to_json())
         return 0
     cols = ["engine", "axis", "value", "class", "error", "status", "flags", "reason"]
-    with _pandas_display():
+    with pandas_display():
         print(s.table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
         print("\nfirst break away from the " + ("paper's frame" if scene is None else
               f"base scene {scene}") + ", per engine and axis:")

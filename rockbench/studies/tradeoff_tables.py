@@ -1,9 +1,9 @@
-"""The tables of the work-precision (:mod:`rockbench.tradeoff`): the error of one case against
+"""The tables of the work-precision (:mod:`rockbench.studies.tradeoff`): the error of one case against
 the analytic model (:func:`case_error`) and its class (:data:`VERDICTS`,
 :func:`classify_error`), the run and summary tables (:data:`RUN_COLUMNS`,
 :data:`TABLE_COLUMNS`, :func:`summarize`, :class:`Tradeoff`), each backend's precision curves
 (:func:`precision_sweeps`) and the machine a measurement ran on (:func:`machine_info`).
-Pure functions over tables; :mod:`rockbench.tradeoff` runs the cases and re-exports these names.
+Pure functions over tables; :mod:`rockbench.studies.tradeoff` runs the cases and re-exports these names.
 Errors are relative (0.02 = 2 %); costs in process CPU s per simulated s.
 """
 
@@ -25,7 +25,7 @@ __all__ = ["VERDICTS", "precision_sweeps", "case_error", "classify_error", "RUN_
            "TABLE_COLUMNS", "summarize", "Tradeoff", "machine_info"]
 
 #: Classes of agreement with the analytic model, best first (``verdict`` columns of the
-#: tradeoff, advise and stress tables). "outside model" is used by :mod:`rockbench.stress` only.
+#: tradeoff, advise and stress tables). "outside model" is used by :mod:`rockbench.studies.robustness` only.
 VERDICTS = ("within 1%", "within 5%", "off", "diverged", "invalid", "outside model")
 
 
@@ -35,7 +35,7 @@ def precision_sweeps(engine: str) -> tuple:
     cost, the values to sweep coarse to fine (None: the sweep's time steps) and the settings
     held with it (e.g. Drake: CENIC's ``accuracy``, and ``dt`` with a fixed-step solver);
     ``(("dt", None, {}),)`` for a backend that declares none."""
-    from .engines import get_backend
+    from ..engines import get_backend
 
     try:
         return tuple(getattr(get_backend(engine), "precision_sweeps", None)
@@ -329,9 +329,9 @@ class Tradeoff:
     machine: dict[str, Any] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        from .result import _jsonable
+        from ..result import jsonable
 
-        return _jsonable({"scene": self.scene, "machine": self.machine,
+        return jsonable({"scene": self.scene, "machine": self.machine,
                           "unavailable": self.unavailable,
                           "cases": [c.to_dict() for c in self.cases],
                           "table": self.table.to_dict("records"),
@@ -351,7 +351,7 @@ def machine_info() -> dict[str, Any]:
     import os
     import platform
 
-    from .engines import engine_info
+    from ..engines import engine_info
 
     proc = platform.processor() or platform.machine()
     try:

@@ -23,7 +23,7 @@ Commands (``docs/cli.md`` shows each with real output)::
 
 One grammar everywhere: ``--engine NAME`` (repeatable where a command runs several;
 ``--engines`` is the same option), ``--setting ENGINE.KEY=VALUE`` (bare ``KEY=VALUE`` only when
-one engine is selected; parsed and validated once, in :mod:`rockbench.cli_input`), ``--out``
+one engine is selected; parsed and validated once, in :mod:`rockbench.cli.common`), ``--out``
 always a folder, ``--phi0`` in radians as ``rockbench.run`` (``--phi0-alpha`` in multiples of
 alpha), ``--quiet`` for no progress (:mod:`rockbench.progress`).
 
@@ -52,14 +52,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .cli_input import (backend_overrides, engine_names, engine_settings, load_scene_from,
-                        motion_from)
-from .cli_options import (  # noqa: F401 - the common options (re-exported for cli_*.py)
-    CommandLineError, _add_motion_options, _add_run_options, _add_scene_options, _count,
-    _key_value, _names, _nonzero, _number, _Parser, _positive, _sign, add_engine_option,
-    add_quiet_option, add_setting_option)
-from .constants import G
-from .errors import ParameterError, RockbenchError
+from .common import (CommandLineError, Parser, add_engine_option, add_motion_options,
+                     add_quiet_option, add_run_options, add_scene_options, add_setting_option,
+                     arg_count, arg_key_value, arg_names, arg_nonzero, arg_number, arg_positive,
+                     arg_sign, backend_overrides, engine_names, engine_settings, load_scene_from,
+                     motion_from, output_folder, pandas_display, print_json, write_atomic)
+from ..constants import G
+from ..errors import ParameterError, RockbenchError
 
 __all__ = ["build_parser", "main"]
 
@@ -76,9 +75,9 @@ COMPARE_COLUMNS = ("backend", "status", "max_abs_phi_over_alpha", "peak_rel_erro
 # ==============================================================================================
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``rockbench`` command."""
-    from . import __version__
+    from .. import __version__
 
-    parser = _Parser(prog=PROG, description="Analytic rocking-frame reference vs physics "
+    parser = Parser(prog=PROG, description="Analytic rocking-frame reference vs physics "
                      "engines. Units: SI and radians.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -87,15 +86,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON")
 
     p = sub.add_parser("info", help="analytic constants of a scene (alpha, p, lambda, eta, ...)")
-    _add_scene_options(p)
+    add_scene_options(p)
     p.add_argument("--json", action="store_true", help="print JSON")
 
     p = sub.add_parser("run", help="simulate a scene with one backend")
-    _add_scene_options(p)
+    add_scene_options(p)
     p.add_argument("--engine", default=None, metavar="NAME", action="append",
                    help="backend (rockbench engines; default analytic)")
-    _add_motion_options(p)
-    _add_run_options(p)
+    add_motion_options(p)
+    add_run_options(p)
     p.add_argument("--out", metavar="DIR",
                    help="write DIR/history.csv and DIR/events.csv")
     p.add_argument("--csv", metavar="FILE.csv",
@@ -108,10 +107,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("compare", help="run several backends and compare them with the "
                        "analytic reference")
-    _add_scene_options(p)
+    add_scene_options(p)
     add_engine_option(p, "every available one")
-    _add_motion_options(p)
-    _add_run_options(p)
+    add_motion_options(p)
+    add_run_options(p)
     p.add_argument("--report", metavar="DIR", help="write an HTML report of the case to DIR")
     p.add_argument("--csv", metavar="FILE.csv", help="write the metrics table as CSV")
     p.add_argument("--json", action="store_true", help="print the tables as JSON")
@@ -128,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--records", metavar="DIR", help="records folder (default: bundled ones)")
     add_engine_option(p, "every available one")
     p.add_argument("--quick", action="store_true", help="a small campaign (minutes)")
-    p.add_argument("--workers", type=_count, metavar="N", help="parallel worker processes")
+    p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")
     p.add_argument("--dask", metavar="ADDRESS",
                    help="run the cases on a dask.distributed scheduler at ADDRESS")
     p.add_argument("--store", metavar="PATH",
@@ -138,12 +137,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "that are missing or no longer reproduce, and the full stability sweep "
                         "(reuses the store)")
     add_quiet_option(p)
-    from .cli_choosing import add_choosing_commands
+    from .choosing import add_choosing_commands
 
     add_choosing_commands(sub)
-    from .cli_maps import add_map_command
-    add_map_command(sub, _key_value, _count)
-    from .cli_fragility import register as add_fragility  # rockbench fragility (issue 26)
+    from .maps import add_map_command
+    add_map_command(sub)
+    from .fragility import register as add_fragility  # rockbench fragility (issue 26)
     add_fragility(sub, COMMANDS)
     return parser
 
@@ -151,37 +150,6 @@ def build_parser() -> argparse.ArgumentParser:
 # ==============================================================================================
 # Shared helpers
 # ==============================================================================================
-def _print_json(data: Any) -> None:
-    print(json.dumps(_jsonable(data), indent=2, allow_nan=False))
-
-
-def _jsonable(x: Any) -> Any:
-    """Plain JSON types; non-finite floats become null."""
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if x is None or isinstance(x, str):
-        return x
-    if isinstance(x, Path):
-        return str(x)
-    try:
-        import pandas as pd
-        if x is pd.NA or x is pd.NaT:
-            return None
-    except ImportError:  # pragma: no cover
-        pass
-    return str(x)
-
-
 def _fmt(v: Any, digits: int = 6) -> str:
     if v is None:
         return "none"
@@ -204,7 +172,7 @@ def _table(rows: list[list[str]], header: list[str]) -> str:
 def _describemotion_from(motion, phi0: float, alpha: float) -> str:
     """The motion's one long label (:func:`rockbench.result.motion_label`), with the initial
     rotation of free rocking and the size of a record."""
-    from .result import motion_label
+    from ..result import motion_label
 
     if motion is None:
         return f"free rocking from phi0 = {phi0 / alpha:.4g} alpha = {phi0:.6g} rad"
@@ -224,12 +192,12 @@ def _events_path(out: Path) -> Path:
 # Commands
 # ==============================================================================================
 def cmd_scenes(args: argparse.Namespace) -> int:
-    from .scene import builtin_scenes, load_scene
+    from ..scene import builtin_scenes, load_scene
 
     rows = [{"name": name, "type": load_scene(name).structure.kind, "description": desc}
             for name, desc in builtin_scenes().items()]
     if args.json:
-        _print_json(rows)
+        print_json(rows)
     else:
         print(_table([[r["name"], r["type"], r["description"]] for r in rows],
                      ["name", "type", "description"]))
@@ -237,13 +205,13 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from . import runner
-    from .analytic.reference import CONSTANTS
+    from .. import runner
+    from ..analytic.reference import CONSTANTS
 
     scene = load_scene_from(args)
     consts = runner.info(scene)
     if args.json:
-        _print_json(consts)
+        print_json(consts)
         return 0
     alpha = consts["alpha"]
     print(f"scene: {consts.get('scene', scene.name)} ({consts.get('type', scene.structure.kind)})"
@@ -258,43 +226,6 @@ def cmd_info(args: argparse.Namespace) -> int:
         rows.append([key, _fmt(value), unit, meaning])
     print(_table(rows, ["quantity", "value", "unit", "meaning"]))
     return 0
-
-
-def _output_folder(path: Path, option: str) -> None:
-    """Create the folder of output ``path`` (given with ``option``) now, before any run, and
-    check it can be written: a one-line error naming the option otherwise."""
-    folder = path.parent
-    try:
-        if path.is_dir():
-            raise RockbenchError(f"cannot write {option} {path}: it is a folder")
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise RockbenchError(f"cannot write {option} {path}: {e.strerror or e}") from None
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise RockbenchError(f"cannot write {option} {path}: folder {folder} is not writable")
-
-
-def _write_atomic(files: dict[Path, Any], option: str) -> None:
-    """Write each DataFrame of ``files`` {path: frame} as CSV to a temporary name beside it,
-    then rename them all into place: either every file is complete or none is changed (and no
-    temporary file is left). Failures are one-line errors naming ``option``."""
-    tmps: dict[Path, Path] = {}
-    try:
-        for path, frame in files.items():
-            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-            tmps[path] = tmp
-            frame.to_csv(tmp, index=False)
-        for path, tmp in tmps.items():
-            os.replace(tmp, path)
-    except OSError as e:
-        raise RockbenchError(f"cannot write {option} {next(iter(files))}: "
-                             f"{e.strerror or e}") from None
-    finally:
-        for tmp in tmps.values():
-            try:
-                tmp.unlink()
-            except OSError:
-                pass
 
 
 def _run_engine(args: argparse.Namespace) -> str:
@@ -324,13 +255,13 @@ def _history_files(args: argparse.Namespace) -> list[tuple[str, Path, Path]]:
                                  "DIR/history.csv)")
         files.append(("--csv", csv, _events_path(csv)))
     for option, history, _ in files:
-        _output_folder(history, option)               # before the run: fail fast
+        output_folder(history, option)               # before the run: fail fast
     return files
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from . import runner
-    from .progress import simulated_time
+    from .. import runner
+    from ..progress import simulated_time
 
     scene = load_scene_from(args)
     engine = _run_engine(args)
@@ -342,7 +273,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                             **overrides)
     files = {}
     for option, history, events in targets:
-        _write_atomic({history: result.history, events: result.events}, option)
+        write_atomic({history: result.history, events: result.events}, option)
         files = {"history_csv": str(history), "events_csv": str(events)}
 
     if args.json:
@@ -351,7 +282,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         data["phi0"] = phi0
         data["real_time_factor"] = result.cost.real_time_factor
         data.update(files)
-        _print_json(data)
+        print_json(data)
         return 0
 
     s, c, alpha = result.summary, result.cost, scene.alpha
@@ -391,18 +322,18 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_engines(args: argparse.Namespace) -> int:
-    from .engines import engine_info
+    from ..engines import engine_info
 
     rows = engine_info()
     for r in rows:
-        from .engines import get_backend
+        from ..engines import get_backend
         try:
             dist = getattr(get_backend(r["name"]), "package", r["name"])
         except RockbenchError:
             dist = r["name"]
         r["package"] = _package_version(dist)
     if args.json:
-        _print_json(rows)
+        print_json(rows)
         return 0
     print(_table([[r["name"], _fmt(r["available"]), r.get("version") or r.get("reason", ""),
                    r["package"] or "not installed"] for r in rows],
@@ -420,8 +351,8 @@ def _package_version(dist: str) -> str | None:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    from . import compare as compare_mod
-    from .runner import REFERENCE, resolve_engines
+    from .. import compare as compare_mod
+    from ..runner import REFERENCE, resolve_engines
 
     scene = load_scene_from(args)
     engines = engine_names(args)
@@ -429,9 +360,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     chosen = [e for e in (engines or resolve_engines(None)) if e != REFERENCE] or [REFERENCE]
     settings = engine_settings(args.settings, chosen, dt=args.dt, also=(REFERENCE,))
     if args.csv:
-        _output_folder(Path(args.csv), "--csv")
+        output_folder(Path(args.csv), "--csv")
     if args.report:
-        _output_folder(Path(args.report) / "index.html", "--report")
+        output_folder(Path(args.report) / "index.html", "--report")
     comparison = compare_mod.compare(scene, motion, engines=engines, phi0=phi0,
                                      duration=args.duration, settings=settings or None,
                                      progress=not args.quiet)
@@ -439,9 +370,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     report_path = csv_path = None
     if args.csv:
         csv_path = Path(args.csv)
-        _write_atomic({csv_path: table}, "--csv")
+        write_atomic({csv_path: table}, "--csv")
     if args.report:
-        from .report import write_case_report
+        from ..report import write_case_report
 
         try:
             report_path = write_case_report(comparison, args.report)
@@ -456,11 +387,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
             data["csv"] = str(csv_path)
         if report_path:
             data["report"] = str(report_path)
-        _print_json(data)
+        print_json(data)
         return 0
     print(f"{scene.name}: {_describemotion_from(motion, phi0, scene.alpha)}")
     cols = [c for c in COMPARE_COLUMNS if c in table.columns]
-    with _pandas_display():
+    with pandas_display():
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     print("units: max_abs_phi_over_alpha, peak_rel_error, nrmse, eta_max_rel_error: -; "
           "max_penetration, max_sliding: m; wall_s: s; real_time_factor: simulated s per wall s")
@@ -471,26 +402,20 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return 0
 
 
-def _pandas_display():
-    import pandas as pd
-
-    return pd.option_context("display.width", 200, "display.max_columns", 50)
-
-
 def _print_constants(out: str | Path, scenes=None) -> None:
     """Print the analytic constants of the campaign's scenes (``scenes``: a user's; default
     the paper plan's) and write them to ``out/constants.csv`` (the table ``rockbench info``
     gives for one scene)."""
     import pandas as pd
 
-    from .analytic.reference import CONSTANTS
-    from .runner import info
-    from .scene import load_scene
+    from ..analytic.reference import CONSTANTS
+    from ..runner import info
+    from ..scene import load_scene
 
     if Path(out).exists() and not Path(out).is_dir():
         raise ParameterError("--out", str(out), "a folder (it is a file)")
     if not scenes:
-        from .campaign import SCENES as scenes
+        from ..campaign.run import SCENES as scenes
 
     keys = ("alpha", "p", "lambda_ccw", "lambda_cw", "eta_ccw", "eta_cw", "phi_cr_ccw",
             "phi_cr_cw", "phi_fall_ccw", "phi_fall_cw", "phi_fracture_ccw", "phi_fracture_cw")
@@ -500,14 +425,14 @@ def _print_constants(out: str | Path, scenes=None) -> None:
     print("Analytic constants of the campaign's scenes (critical angle: none = no zero of "
           "dV/dphi before the fall angle; fracture: none = no fracture):")
     shown = table.rename(columns={c: f"{c} [{u}]" if u else c for c, u in cols.items()})
-    with _pandas_display():
+    with pandas_display():
         print(shown.to_string(index=False, na_rep="none", float_format=lambda v: f"{v:.5g}"))
-    _output_folder(Path(out) / "constants.csv", "--out")
-    _write_atomic({Path(out) / "constants.csv": table}, "--out")
+    output_folder(Path(out) / "constants.csv", "--out")
+    write_atomic({Path(out) / "constants.csv": table}, "--out")
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from . import campaign
+    from ..campaign import run as campaign
 
     if args.records is not None and not Path(args.records).is_dir():
         raise ParameterError("--records", args.records, "an existing folder of record files")
@@ -544,16 +469,16 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def _choosing(name: str):
-    """``rockbench tradeoff | advise | stress`` (rockbench/cli_choosing.py), imported on use."""
+    """``rockbench tradeoff | advise | stress`` (rockbench/cli/choosing.py), imported on use."""
     def command(args: argparse.Namespace) -> int:
-        from . import cli_choosing
+        from . import choosing as cli_choosing
 
         return getattr(cli_choosing, f"cmd_{name}")(args)
     return command
 
 
 def _map(args: argparse.Namespace) -> int:
-    from .cli_maps import cmd_map
+    from .maps import cmd_map
     return cmd_map(args)
 
 
@@ -579,7 +504,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except SystemExit as e:  # --help, --version
         return e.code if isinstance(e.code, int) else 0
-    from .progress import configure
+    from ..progress import configure
 
     configure(quiet=bool(getattr(args, "quiet", False)))
     try:

@@ -1,9 +1,9 @@
 """The "choosing a modelling approach" part of the default campaign (issues 13, 24):
 work-precision of every engine on the paper's asymmetric frame (the quick evidence of
-:func:`rockbench.validation.validation_set` - a subset of the default one, split into a choice
+:func:`rockbench.studies.validation.validation_set` - a subset of the default one, split into a choice
 and a held-out part - at three time steps; ``full=True``: the default evidence; steady-state
 process CPU time), the advice it supports at 2 % and 0.2 % (chosen on the choice part,
-confirmed on the held-out part, :func:`rockbench.advise.decide`), and the stability sweep (the
+confirmed on the held-out part, :func:`rockbench.studies.advise.decide`), and the stability sweep (the
 fast form of ``rockbench stress``; ``full=True`` runs its full form).
 
 Self-consistency (each setting against the same engine at dt / 4) is left to ``rockbench
@@ -20,7 +20,7 @@ import pandas as pd
 __all__ = ["CHOICE_SCENE", "CHOICE_DTS", "run_choice", "recommendation"]
 
 #: Scene and time steps [s] of the report's work-precision sweep.
-from .sweep.cases import campaign_plan as _plan  # noqa: E402
+from ..sweep.cases import campaign_plan as _plan  # noqa: E402
 
 CHOICE_SCENE = _plan()["choice_scene"]     # scenarios/paper-plan.toml
 CHOICE_DTS = _plan()["choice_dts"]
@@ -31,19 +31,19 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                progress: bool = False, scene: Any = None, dts: Sequence[float] | None = None,
                stress_scene: Any = None, stress_hybrid: Any = None) -> dict[str, Any]:
     """{"tradeoff": table, "advice": frame, "stress": table or None, "breaks": the first
-    breaking point of each engine along each axis (:func:`rockbench.stress.breaking_points`)
+    breaking point of each engine along each axis (:func:`rockbench.studies.robustness.breaking_points`)
     or None, "words": [str]}: the
     stability sweep runs in its fast form (``full``: the full form; ``quick``: none)."""
-    from .advise import advice_for_report
-    from .scene.scene import load_scene
-    from .stress import breaking_points, stress
-    from .tradeoff import tradeoff
+    from ..studies.advise import advice_for_report
+    from ..scene.scene import load_scene
+    from ..studies.robustness import breaking_points, stress
+    from ..studies.tradeoff import tradeoff
 
     names = [e for e in engines if e != "analytic"]
     if not names:
         return {"tradeoff": pd.DataFrame(), "advice": pd.DataFrame(), "stress": None,
                 "breaks": None, "words": []}
-    from .validation import validation_set
+    from ..studies.validation import validation_set
 
     scene = CHOICE_SCENE if scene is None else scene
     dts = tuple(CHOICE_DTS if dts is None else dts)
@@ -81,7 +81,7 @@ def recommendation(advice: pd.DataFrame, scene: str = CHOICE_SCENE) -> list[str]
                     f"(worst error {100 * b['worst_error']:.2f} %{ho_text}, "
                     f"{b['cpu_per_sim_s']:.3g} CPU s per simulated s, real-time factor "
                     f"{b['real_time_factor']:.3g})")
-            from .advise import TIE
+            from ..studies.advise import TIE
 
             tied = [r for _, r in meets.iloc[1:].iterrows()
                     if r["cpu_per_sim_s"] <= TIE * b["cpu_per_sim_s"]]

@@ -1,5 +1,5 @@
 """The ``rockbench fragility`` command (issue 26, ``docs/fragility.md``): arguments and output
-only; the work is :mod:`rockbench.fragility`.
+only; the work is :mod:`rockbench.studies.fragility`.
 
     rockbench fragility SCENE --records DIR|FILE|NAME ... [--engine E ...] [--scales LO:HI:N]
                         [--intensity pga|pgv] [--boot N] [--seed S] [--setting ENGINE.KEY=VALUE ...]
@@ -15,22 +15,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from .common import (add_engine_option, add_quiet_option, add_setting_option, arg_count,
+                     arg_key_value, print_json)
+
 __all__ = ["register", "add_fragility_command", "cmd_fragility"]
-
-
-def _key_value(text: str) -> tuple[str, str]:
-    from .cli import _key_value as kv
-    return kv(text)
-
-
-def _count(text: str) -> int:
-    from .cli import _count as c
-    return c(text)
 
 
 def register(sub, commands: dict) -> None:
     """Add the ``fragility`` sub-command to ``sub`` and its handler to ``commands`` (the one
-    line :mod:`rockbench.cli` spends on it)."""
+    line :mod:`rockbench.cli.main` spends on it)."""
     add_fragility_command(sub)
     commands["fragility"] = cmd_fragility
 
@@ -40,13 +33,12 @@ def add_fragility_command(sub) -> None:
                        "records, every engine against the analytic model")
     p.add_argument("scene", metavar="SCENE",
                    help="a built-in scene name (rockbench scenes) or a path to a .toml file")
-    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=_key_value,
+    p.add_argument("--set", dest="overrides", metavar="KEY=VALUE", type=arg_key_value,
                    action="append", default=[], help="override a scene parameter")
     p.add_argument("--records", nargs="+", action="extend", required=True,
                    metavar="DIR|FILE|NAME",
                    help="record folders, record files, or a bundled ensemble name "
                         "(bundled, or a folder shipped under rockbench/records)")
-    from .cli import add_engine_option, add_quiet_option, add_setting_option
 
     add_engine_option(p, "every available backend; the analytic model always runs")
     p.add_argument("--scales", default="0.25:2:8", metavar="LO:HI:N",
@@ -54,7 +46,7 @@ def add_fragility_command(sub) -> None:
                         "HI inclusive (default 0.25:2:8)")
     p.add_argument("--intensity", choices=("pga", "pgv"), default="pga",
                    help="intensity measure: pga [m/s^2] (default) or pgv [m/s]")
-    p.add_argument("--boot", type=_count, default=1000, metavar="N",
+    p.add_argument("--boot", type=arg_count, default=1000, metavar="N",
                    help="bootstrap resamples of the records (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
     add_setting_option(p)
@@ -64,7 +56,7 @@ def add_fragility_command(sub) -> None:
                    help="resumable store (default fragility/SCENE); a rerun runs only "
                         "missing cases")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=_count, metavar="N", help="local worker processes")
+    g.add_argument("--workers", type=arg_count, metavar="N", help="local worker processes")
     g.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
     p.add_argument("--json", action="store_true", help="print JSON")
     add_quiet_option(p)
@@ -92,9 +84,9 @@ def _interval(ci) -> str:
 
 
 def cmd_fragility(args: argparse.Namespace) -> int:
-    from .cli_input import engine_names, engine_settings, load_scene_from, scene_overrides
-    from .fragility import run_fragility
-    from .runner import REFERENCE, resolve_engines
+    from .common import engine_names, engine_settings, load_scene_from, scene_overrides
+    from ..studies.fragility import run_fragility
+    from ..runner import REFERENCE, resolve_engines
 
     load_scene_from(args)                      # a bad scene or --set fails now
     engines = engine_names(args)
@@ -109,8 +101,7 @@ def cmd_fragility(args: argparse.Namespace) -> int:
                          seed=args.seed)
     out = summary(frag)
     if args.json:
-        from .cli import _print_json
-        _print_json(out)
+        print_json(out)
         return 0
     im = out["intensity"]
     print(f"{frag.scene}: {out['records']} records x 2 polarities x {len(frag.scales)} scales "

@@ -28,8 +28,8 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from .errors import ParameterError, RockbenchError
-from .sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
+from ..errors import ParameterError, RockbenchError
+from ..sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
                               error_rows, load_map, map_rows, open_map_store, part_files,
                               read_inputs, simulated_rows, store_error, store_inputs, tidy_map,
                               write_part)
@@ -96,7 +96,7 @@ def map_cells(*, grid: Any = (100, 100), amplitude: Any = (0.5, 8.0),
 
 def _axes(grid: Any, amplitude: Any, frequency: Any) -> tuple[np.ndarray, np.ndarray]:
     """The A and W values of a map's grid (checked against the limits of every run)."""
-    from .limits import check_in_limit
+    from ..limits import check_in_limit
 
     na, nw = _grid(grid)
     a0, a1 = _range(amplitude, "amplitude")
@@ -112,8 +112,10 @@ def _axes(grid: Any, amplitude: Any, frequency: Any) -> tuple[np.ndarray, np.nda
 # ------------------------------------------------------------------------------------------
 # Running a map
 # ------------------------------------------------------------------------------------------
-def _duration(scene, W: float, tail: float | None) -> float | None:
-    """Run length [s] of a cell: the pulse window 6 T_g plus ``tail`` (None: the default, + 10 s)."""
+def cell_duration(scene, W: float, tail: float | None) -> float | None:
+    """Run length [s] of a pulse cell (a map's, or any Ricker-pulse case of the campaign): the
+    pulse window 6 T_g (T_g = 2 pi / (W p), p of the taller column) plus ``tail`` [s] of free
+    rocking; None (the package default, the motion + 10 s) when ``tail`` is None."""
     if tail is None:
         return None
     return 6.0 * 2.0 * math.pi / (W * scene.p) + tail
@@ -129,7 +131,7 @@ FALL_EXTENSION = 20.0
 def _load_scene_ref(ref: Any, overrides: dict | None = None):
     """A Scene from what travels to a worker: a built-in name or a path (with ``overrides``),
     or a scene's table (:meth:`Scene.to_dict`, overrides already applied)."""
-    from .scene.scene import Scene, load_scene
+    from ..scene.scene import Scene, load_scene
 
     if isinstance(ref, dict):
         return Scene.from_dict(ref, source=f"scene {ref.get('name', '')!r}")
@@ -141,7 +143,7 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
     """Map rows of analytic ``cells`` in their order, each run for its map length plus
     ``extra`` seconds."""
     if method == "compiled":
-        from .analytic.compiled import run_pulse_grid
+        from ..analytic.compiled import run_pulse_grid
         if tail is None and not extra:
             df = run_pulse_grid(scene, cells)
         else:
@@ -150,18 +152,18 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
             for i, c in enumerate(cells):
                 byw.setdefault(c[3], []).append(i)
             df = pd.concat([run_pulse_grid(scene, [cells[i] for i in ix],
-                                           duration=_duration(scene, w, t + extra))
+                                           duration=cell_duration(scene, w, t + extra))
                             for w, ix in byw.items()], ignore_index=True)
             order = np.concatenate([np.asarray(ix) for ix in byw.values()])
             df = df.iloc[np.argsort(order, kind="stable")].reset_index(drop=True)  # cells' order
         df["wall_s"] = df["cpu_s"]
         return df[list(MAP_COLUMNS)]
-    from .runner import run
-    from .scene.motion import RickerPulse
+    from ..runner import run
+    from ..scene.motion import RickerPulse
     rows = []
     for shape, sign, A, W in cells:
         pulse = RickerPulse.dimensionless(A, W, scene.structure, shape, sign)
-        dur = None if tail is None and not extra else _duration(
+        dur = None if tail is None and not extra else cell_duration(
             scene, W, (10.0 if tail is None else tail) + extra)
         r = run(scene, pulse, history="minimal", duration=dur)
         s = r.summary
@@ -201,8 +203,8 @@ def _analytic_chunk(args: tuple) -> pd.DataFrame:
     return df
 def _check_backend(engine: str) -> None:
     """BackendUnavailable (one line: which backend, why) before any cell runs."""
-    from .engines import get_backend
-    from .errors import BackendUnavailable
+    from ..engines import get_backend
+    from ..errors import BackendUnavailable
 
     ok, info = get_backend(engine).available()
     if not ok:
@@ -240,10 +242,10 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
     ``reused`` (cells taken from the store), ``cells_run`` (simulated now) and, adaptive,
     ``inferred``.
     """
-    from .runner import resolve_engines
-    from .scene.scene import Scene, apply_overrides
-    from .sweep.executors import check_options
-    from .sweep.store import need_pyarrow, writer_lock
+    from ..runner import resolve_engines
+    from ..scene.scene import Scene, apply_overrides
+    from ..sweep.executors import check_options
+    from ..sweep.store import need_pyarrow, writer_lock
 
     if isinstance(scene, Scene):
         sc = (Scene.from_dict(apply_overrides(scene.to_dict(), overrides), source=scene.name)
@@ -279,7 +281,7 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
         if not adaptive:
             return _run_cells(sc, scene_ref, ref_name, engine, settings, method, overrides,
                               cells, stored, *common)
-        from .sweep.adaptive import adaptive_map
+        from ..sweep.adaptive import adaptive_map
 
         return adaptive_map(sc, lambda cs, st: _run_cells(
             sc, scene_ref, ref_name, engine, settings, method, overrides, cs, st, *common),
@@ -318,7 +320,7 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
                chunk: int | None, tail: float | None) -> pd.DataFrame:
     """Run the cells not yet in the store (``stored`` = (folder, its rows), or None), writing
     each finished result to it at once; return the map of ``cells``."""
-    from .sweep.executors import cpu_count, execute, local_workers
+    from ..sweep.executors import cpu_count, execute, local_workers
 
     path, done = stored if stored is not None else (None, pd.DataFrame(
         columns=list(MAP_COLUMNS)))
@@ -381,11 +383,11 @@ def _engine_rows(scene_ref: Any, overrides: dict | None, engine: str, settings: 
     :func:`rockbench.sweep.run_cases` (MuJoCo batched) with ``execution`` options;
     ``on_rows(frame)`` is called with the map rows of each finished executor item (a cell, or
     a MuJoCo batch) as it finishes."""
-    from .sweep import run_cases
+    from ..sweep import run_cases
 
     sc = _load_scene_ref(scene_ref, overrides)
     cases = [{"scene": scene_ref, "overrides": overrides or {}, "engine": engine,
-              "settings": settings, "duration": _duration(sc, W, tail),
+              "settings": settings, "duration": cell_duration(sc, W, tail),
               "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W}}
              for sh, sg, A, W in cells]
     rows = run_cases(cases, on_rows=(None if on_rows is None else
@@ -405,7 +407,10 @@ VERIFY_RTOL = 1e-6
 def _check_cells(df: pd.DataFrame, n: int) -> pd.DataFrame:
     """Up to ``n`` stored cells to re-run: short runs (the highest frequencies), one per pulse
     and sign, alternately a survivor that rocked (the median rocking amplitude of the
-    survivors) and an overturning cell far from the boundary (the largest A)."""
+    survivors) and an overturning cell far from the boundary (the largest A). Only simulated
+    cells: an adaptive map's inferred cells (column ``inferred``) have no run to repeat."""
+    if "inferred" in df.columns:
+        df = df[~df["inferred"].fillna(False).astype(bool)]
     top = df[df["frequency"] >= df["frequency"].quantile(0.66)]
     picks = []
     for i, ((_p, _s), g) in enumerate(top.groupby(["pulse", "sign"], sort=True)):
@@ -437,7 +442,7 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
     meta = path / "_inputs.json"
     if not meta.is_file():
         return None, f"no measured map at {path}"
-    from .scene.scene import load_scene
+    from ..scene.scene import load_scene
 
     sc = load_scene(scene)
     want = store_inputs(sc, str(scene), engine, {}, "", tail, keyed_by_code=False)
@@ -488,7 +493,7 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
 
 def _default_method() -> str:
     try:
-        from .analytic import compiled  # noqa: F401
+        from ..analytic import compiled  # noqa: F401
         compiled._require_numba()
     except Exception:
         return "solve_ivp"
@@ -524,7 +529,7 @@ def mark_near_boundary(ref: pd.DataFrame, scene: Any, *, margin: float = NEAR_BO
     reference verdict changes within ``margin`` (relative) of the cell's A, i.e. where the
     analytic model run at A (1 - margin) or A (1 + margin), same pulse and W, gives the other
     verdict than at A (cells not ok: False). ``tail`` as the map's run length."""
-    from .errors import check_positive
+    from ..errors import check_positive
 
     if not 0 < check_positive("margin", margin) < 1:
         raise ParameterError("margin", margin, "in (0, 1)")
@@ -533,7 +538,7 @@ def mark_near_boundary(ref: pd.DataFrame, scene: Any, *, margin: float = NEAR_BO
     ok = out[out["status"] == "ok"]
     if not len(ok):
         return out
-    from .scene.scene import Scene
+    from ..scene.scene import Scene
 
     sc = scene if isinstance(scene, Scene) else _load_scene_ref(str(scene), overrides)
     method = method or _default_method()

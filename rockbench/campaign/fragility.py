@@ -1,5 +1,5 @@
 """The default campaign's fragility section (issue 26, ``docs/fragility.md``): the runs and
-analyses of :mod:`rockbench.fragility` on the paper's Fig. 9 frames, at a size that keeps
+analyses of :mod:`rockbench.studies.fragility` on the paper's Fig. 9 frames, at a size that keeps
 ``make report`` within its budget (:data:`REPORT_SIZES`; the whole ladder for every engine with
 ``rockbench report --full``). The page block is
 :func:`rockbench.report.fragility_figures.fragility_html`."""
@@ -13,8 +13,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from .errors import ParameterError
-from .fragility import _ensemble_dir, _record_ims, resolve_records, run_fragility
+from ..errors import ParameterError
+from ..studies.fragility import ensemble_dir, record_ims, resolve_records, run_fragility
 
 __all__ = ["REPORT_SIZES", "fragility_section", "section_table"]
 
@@ -38,8 +38,8 @@ REPORT_SIZES: dict[str, dict[str, Any]] = {
 
 def _fast(names: Sequence[str]) -> list[str]:
     """The engines whose adapter has a compiled stepping loop (the cheap ones on records)."""
-    from .engines import get_backend
-    from .engines.base import EngineBackend
+    from ..engines import get_backend
+    from ..engines.base import EngineBackend
 
     out = []
     for n in names:
@@ -61,18 +61,18 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
     ``progress``). Returns ``{"what": sentence, "frames": [{"label", "scene", "runs",
     "analysis", "stripes"}], "fig9": True, "records": frame of the records, "size": ...}``,
     or ``{"error": text}`` if the runs cannot be made."""
-    from .runner import REFERENCE
+    from ..runner import REFERENCE
 
     if size not in REPORT_SIZES:
         raise ParameterError("size", size, f"one of {', '.join(REPORT_SIZES)}")
     cfg = REPORT_SIZES[size]
     if records is None:
-        records = "sac-la-2in50" if _ensemble_dir("sac-la-2in50") is not None else "bundled"
+        records = "sac-la-2in50" if ensemble_dir("sac-la-2in50") is not None else "bundled"
     engs = [e for e in engines if e != REFERENCE]
     engs = _fast(engs) if cfg["engines"] == "fast" else engs
     try:
         recs = resolve_records(records)
-        median_pga = float(np.median(_record_ims(recs)["pga"]))
+        median_pga = float(np.median(record_ims(recs)["pga"]))
         lo, hi, n = cfg["pga"]
         ladder = np.round(np.geomspace(lo, hi, n) / median_pga, 6)
         steps = cfg["engine_steps"]
