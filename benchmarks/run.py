@@ -28,14 +28,11 @@ from rockbench.sweep.cases import catalogue
 
 
 def cpu_name() -> str:
-    """The processor's model name (/proc/cpuinfo), for the benchmarks' machine lines."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+    """The processor's model name, for the benchmarks' machine lines (one reader:
+    :func:`rockbench.machine.cpu_name`)."""
+    from rockbench.machine import cpu_name as name
+
+    return name()
 
 
 def machine() -> dict:

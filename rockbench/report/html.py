@@ -14,7 +14,6 @@ from __future__ import annotations
 import datetime as _dt
 import platform
 import string
-import sys
 from collections.abc import Iterable, Mapping, Sequence
 from html import escape
 from importlib import resources
@@ -180,13 +179,16 @@ def versions(engines: Mapping[str, str] | None = None) -> dict[str, Any]:
 
     from .. import __version__
 
+    from ..machine import describe
+
+    m = describe()
     out: dict[str, Any] = {
         "rockbench": __version__,
-        "python": sys.version.split()[0],
-        "platform": platform.platform(),
+        "python": m["python"],
+        "platform": m["platform"],
         "machine": platform.machine(),
-        "processor": platform.processor() or "",
-        "cpu_count": _cpu_count(),
+        "processor": m["processor"],
+        "cpu_count": m["cores"],
         "numpy": np.__version__,
         "scipy": scipy.__version__,
         "pandas": pd.__version__,
@@ -195,15 +197,6 @@ def versions(engines: Mapping[str, str] | None = None) -> dict[str, Any]:
     for name, version in (engines or {}).items():
         out[f"engine {name}"] = version
     return out
-
-
-def _cpu_count() -> int:
-    import os
-
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
 
 
 def _dl(items: Iterable[tuple[str, Any]]) -> str:

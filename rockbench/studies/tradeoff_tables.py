@@ -347,22 +347,12 @@ class Tradeoff:
 
 
 def machine_info() -> dict[str, Any]:
-    """Where the cost was measured: processor, cores, Python, engine versions."""
-    import os
-    import platform
-
+    """Where the cost was measured: :func:`rockbench.machine.describe` (processor, cores,
+    Python, platform) and the versions of the engines."""
     from ..engines import engine_info
+    from ..machine import describe
 
-    proc = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    proc = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return {"processor": proc, "cores": os.cpu_count(), "python": platform.python_version(),
+    return {**describe(),
             "engines": {r["name"]: r.get("version", r.get("reason")) for r in engine_info()}}
 
 
