@@ -138,11 +138,13 @@ def _probe(states, modes, table, frame, tol, open_tol, beam_hh, beam_x, pen, sli
             bxj, byj, bth = states[j, 1, 0], states[j, 1, 1], states[j, 1, 2]
             bc, bs_ = np.cos(bth), np.sin(bth)
         p, sl, op = 0.0, 0.0, False
+        last, c, s = -1, 1.0, 0.0
         for r in range(table.shape[0]):
             i = int(table[r, 0])
             lx, ly, kind, rx0 = table[r, 1], table[r, 2], int(table[r, 3]), table[r, 4]
             x, y, th = states[j, i, 0], states[j, i, 1], states[j, i, 2]
-            c, s = np.cos(th), np.sin(th)
+            if i != last:                            # a body's rows are consecutive
+                c, s, last = np.cos(th), np.sin(th), i
             X = x + c * lx - s * ly
             Y = y + s * lx + c * ly
             if kind < 2:

@@ -51,10 +51,14 @@ from .verdicts import (_collapse, _energy_floor, _exceeded, _falling, _frozen, _
                        _peak_energy_growth)
 
 __all__ = ["Stepped", "Outcome", "step_run", "finish", "SampleChecks", "device_geometry",
-           "PROBE_CHUNK"]
+           "impact_arguments", "PROBE_CHUNK", "DRIVE_CHUNKS"]
 
 #: Output samples probed together (vectorized) for the penetration / sliding divergence check.
 PROBE_CHUNK = 500
+
+#: The compiled loop returns to Python every DRIVE_CHUNKS x PROBE_CHUNK samples (:func:`_drive`);
+#: the checks run on the PROBE_CHUNK chunks of the Python loop all the same.
+DRIVE_CHUNKS = 8
 
 
 class Diverged(Exception):
@@ -99,9 +103,11 @@ class Stepped:
 @dataclass
 class Outcome:
     """What a map keeps of an engine run (:func:`finish` with ``keep="summary"``): the
-    :class:`~rockbench.result.Summary` and :class:`~rockbench.result.Cost` a full Result would
-    hold, the impact events as rows (dicts of EVENT_COLUMNS, in time order), the backend's name
-    and settings (with ``engine_version``); no history, no events frame."""
+    :class:`~rockbench.result.Summary` a full Result would hold - every field but
+    ``eta_measured``, which stays empty (a map does not measure the impacts' eta) - its
+    :class:`~rockbench.result.Cost`, the backend's name and settings (with
+    ``engine_version``); no history, no events frame, no impact rows (``impacts`` is empty:
+    kept so that a sweep row reads an Outcome as a Result, its eta means NaN)."""
 
     backend: str
     summary: Summary
@@ -299,8 +305,16 @@ def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact
            fall, devices, check_strain, checker, out, backend) -> int:
     """Run a compiled stepping loop (``backend._compiled_loop()``, the protocol of
     :func:`rockbench.engines.compiled_loop.run_kernel`) to the end of the run, with the sample
-    checks between its calls; return the samples written. Raises :class:`Diverged` as the
-    Python loop does."""
+    checks of the Python loop; return the samples written. Raises :class:`Diverged` as the
+    Python loop does.
+
+    The kernel returns to Python every :data:`DRIVE_CHUNKS` x :data:`PROBE_CHUNK` samples
+    (a return costs ~56 us of numba dispatch, the price of ~15 engine steps); the checks then
+    run on the same chunks, in the same order, as the Python loop's (:func:`_boundaries`). A
+    chunk that fails ends the run where the Python loop ends it - its samples, steps and
+    events (a fracture or an overturn the kernel found after that chunk's end is not
+    recorded), so the run is the same; the kernel only stepped further in a run that
+    diverged (``tests/engines/test_map_path.py``)."""
     from .compiled_loop import LoopState as L
     from .device_kernel import device_params
 
@@ -309,28 +323,39 @@ def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact
     prev = np.zeros_like(state)
     dev = device_params(devices) if devices is not None else np.zeros(0)
     clock = time.perf_counter
+    # the time of every step's end (index k: after k steps) plus the loop's tolerance
+    t_tolled = np.concatenate(([t0], t_steps)) + t_tol
     n = 0
 
-    def fracture() -> None:          # the fracture event, as the Python loop records it
-        if ls[L.FRAC] and not out.fractured:
+    def fracture(before: float = math.inf) -> None:   # the event, as the Python loop has it
+        if ls[L.FRAC] and not out.fractured and ls[L.T_FRAC] < before:
             t, phi, pd_ = ls[L.T_FRAC], ls[L.PHI_FRAC], ls[L.PD_FRAC]
             out.fractured, out.t_fracture = True, float(t)
             out.events.append(dict(t=float(t), kind="fracture", phi=float(phi),
                                    phidot_before=float(pd_), phidot_after=float(pd_),
                                    direction=1 if phi > 0 else -1))
+
+    def check_chunks(n: int) -> None:  # the Python loop's chunk checks up to sample n
+        for end, k in _boundaries(grid, t_tolled, checker.checked, n):
+            try:
+                checker.check(states, sample_intact, grid, end, out)
+            except Diverged as e:   # the Python loop stopped here: after k steps, end samples
+                backend.steps = k
+                fracture(before=t_steps[k - 1] if k else t0)
+                e.samples = end
+                raise
     try:
         while True:
             ts = clock()
             code = kernel(gx, t_steps, grid, t_tol, states, sample_intact, state, prev, ls,
                           fall[0], fall[1], G, backend.settings.dt, dev, bool(check_strain),
-                          checker.checked + PROBE_CHUNK)
+                          checker.checked + DRIVE_CHUNKS * PROBE_CHUNK)
             backend.wall_s += clock() - ts
             backend.steps = int(ls[L.STEPS])
             n = int(ls[L.N])
+            check_chunks(n)
             if code != 1:
                 break
-            fracture()
-            checker.check(states, sample_intact, grid, n, out)
         fracture()
         if code == 3:
             raise Diverged(f"non-finite body state at t={ls[L.T]:.6g} s")
@@ -342,9 +367,35 @@ def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact
                                    direction=1 if phi > 0 else -1))
         checker.check(states, sample_intact, grid, n, out)
     except Diverged as e:
-        e.samples = n
+        if not hasattr(e, "samples"):
+            e.samples = n
         raise
     return n
+
+
+def _boundaries(grid: np.ndarray, t_tolled: np.ndarray, start: int, n: int):
+    """The (samples written, steps taken) at which the Python loop checks samples
+    ``start`` ... ``n`` - 1: its first return after ``PROBE_CHUNK`` more samples, from where
+    the last check ended, for every such return within the ``n`` samples written.
+    ``t_tolled[k]``: the time after k steps plus the loop's tolerance (a sample at grid time
+    tg is written once tg <= t + tol)."""
+    while start + PROBE_CHUNK <= n:
+        k = int(np.searchsorted(t_tolled, grid[start + PROBE_CHUNK - 1], "left"))
+        end = int(np.searchsorted(grid, t_tolled[k], "right"))
+        if end > n:
+            return
+        yield end, k
+        start = end
+
+
+def _falling_or_none(phi: np.ndarray, intact: np.ndarray, crit: dict) -> np.ndarray | None:
+    """:func:`~rockbench.engines.verdicts._falling` (the samples past their critical angle),
+    or None when none is: |phi| stays at or below every finite critical angle (the common
+    case, which then costs one reduction instead of four masks)."""
+    finite = [c for c in crit.values() if math.isfinite(c)]
+    if not finite or not phi.size or float(np.abs(phi).max()) <= min(finite):
+        return None
+    return _falling(phi, intact, crit)
 
 
 class SampleChecks:
@@ -383,10 +434,14 @@ class SampleChecks:
             return
         sim_time(grid[n - 1], grid[0], grid[-1])   # progress of a long run (rockbench.progress)
         S = states[start:n]
-        bad = ~np.isfinite(S).all(axis=(1, 2))
-        if bad.any():
-            i = int(np.argmax(bad))
-            self._fail(start + i, f"non-finite body state at t={grid[start + i]:.6g} s")
+        if not math.isfinite(float(S.sum())):      # (a finite sum: every state finite)
+            bad = ~np.isfinite(S).all(axis=(1, 2))
+            if bad.any():
+                i = int(np.argmax(bad))
+                self._fail(start + i, f"non-finite body state at t={grid[start + i]:.6g} s")
+        ph = S[:, 0, 2]
+        # the samples past the critical angle (none when |phi| stays below every one of them)
+        falling = _falling_or_none(ph, intact[start:n], self.crit)
         if self.free:
             e = (0.5 * (self.mass * (S[:, :, 3] ** 2 + S[:, :, 4] ** 2)
                         + self.inertia * S[:, :, 5] ** 2).sum(axis=1)
@@ -396,14 +451,14 @@ class SampleChecks:
             scale = max(abs(self.energy0) + self.energy_floor, 1e-300)
             # not while falling past the critical angle (as the contact checks): the verdict
             # is what matters there, and a fall's energies dwarf E0 ~ 0 of a release near 2 alpha
-            grew = (e > self.energy0 + cfg.energy_gain_tol * scale) & ~_falling(
-                S[:, 0, 2], intact[start:n], self.crit)
+            grew = e > self.energy0 + cfg.energy_gain_tol * scale
+            if falling is not None:
+                grew &= ~falling
             if grew.any():
                 i = int(np.argmax(grew))
                 self._fail(start + i, f"mechanical energy grew by "
                                       f"{100 * (e[i] - self.energy0) / scale:.2f} % without "
                                       f"input (t={grid[start + i]:.4g} s)")
-        ph = S[:, 0, 2]
         modes = np.where(np.abs(ph) <= self.uplift_phi, 0, np.sign(ph))
         pen, sl, op = self.probe.measure_many(S, modes)
         if self.contact is None:
@@ -411,9 +466,10 @@ class SampleChecks:
             self.contact = (np.zeros(size), np.zeros(size), np.zeros(size, dtype=bool))
         for whole, part in zip(self.contact, (pen, sl, op)):
             whole[start:n] = part
-        falling = _falling(ph, intact[start:n], self.crit)
-        self.max_pen = max(self.max_pen, float(pen[~falling].max(initial=0.0)))
-        self.max_slide = max(self.max_slide, float(sl[~falling].max(initial=0.0)))
+        if falling is not None:
+            pen, sl = pen[~falling], sl[~falling]
+        self.max_pen = max(self.max_pen, float(pen.max(initial=0.0)))
+        self.max_slide = max(self.max_slide, float(sl.max(initial=0.0)))
         if self.max_pen > cfg.max_penetration:
             raise Diverged(f"penetration {self.max_pen:.3g} m > max_penetration "
                            f"{cfg.max_penetration:g} m")
@@ -431,9 +487,16 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     after the ground motion), summary and cost. ``settings`` is the backend's Settings
     (``uplift_tol``, ``max_penetration``, ``max_sliding``, ``energy_gain_tol``).
 
-    ``keep="summary"`` (what a map keeps): the same arithmetic, without building the history
-    and events frames; returns an :class:`Outcome` (summary, cost, impact rows) whose summary
-    equals the full Result's field by field (``tests/engines/test_map_path.py``)."""
+    ``keep="summary"`` (what a map keeps: status and reason, verdict, peak, impacts, fracture,
+    contact maxima): returns an :class:`Outcome` whose summary equals the full Result's field
+    by field except ``eta_measured`` (empty), without the history and events frames and
+    without measuring every impact's eta (``tests/engines/test_map_path.py``). Its impacts are
+    counted from the excursions (:func:`~rockbench.measure.measure_impacts` measures one per
+    excursion that begins with an impact); they are measured only where a verdict needs them:
+    every impact of a run that overturned (those after the overturn do not count), and, for
+    the rule "two impacts and not one measurable eta: invalid" (:func:`_unmeasured`), the
+    first impact (on the history up to the end of the excursion after it, which is all its
+    measurement reads), then all of them if its eta is not finite."""
     if keep not in ("all", "summary"):
         raise ParameterError("keep", keep, "'all' (the Result) or 'summary' (an Outcome)")
     cfg = settings
@@ -460,7 +523,9 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
         pen, sl, op = stepped.contact
     else:
         pen, sl, op = ContactProbe(scene, specs).measure_many(S, modes)
-    falling = _falling(ph, intact, crit)
+    falling = _falling_or_none(ph, intact, crit)
+    if falling is None:
+        falling = np.zeros(n, dtype=bool)
     # contact violations while the structure is past its critical angle do not make a run
     # diverged if it goes on to overturn (an engine's falling bodies may slide or sink: the
     # verdict is what matters); before that, or if it never overturns, they do
@@ -492,22 +557,19 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
             ev.append(dict(t=float(tt[j]), kind="uplift", phi=float(ph[j]),
                            phidot_before=float(pd_[j]), phidot_after=float(pd_[j]),
                            direction=x.sign))
-    energy = inertia0 = None
     dyn = ref.dyn if len(exc) else None
-    if free and dyn is not None:
-        energy = lambda p: dyn[1 if p > 0 else -1].energy(p, 0.0)  # noqa: E731
-        inertia0 = lambda s: dyn[s].terms(0.0).inertia  # noqa: E731
-    # impacts: the energy of successive peaks in free rocking; otherwise the mechanism's own
-    # equation of motion (device forces, ground motion) integrated from either side of each
-    # impact to phi = 0 (rockbench.measure, docs/metrics.md)
-    imp = measure_impacts(tt, ph, pd_, alpha=alpha, free=free, energy=energy,
-                          inertia0=inertia0, uplift_tol=uplift_phi, rest_rate=rest_rate,
-                          dynamics=ref.dyn,
-                          ground_acc=motion.acceleration if motion is not None else None,
-                          intact=intact, closure=closure_function(scene, motion))
-    if overturned:
-        imp = [r for r in imp if r["t"] <= t_over]
-    ev.extend(imp)
+    measure = impact_arguments(scene, motion, cfg, free)
+    counted = keep == "summary" and not overturned     # a map's impacts, counted (docstring)
+    if counted:
+        imp = None
+        n_imp = sum(x.after_impact for x in exc)
+    else:
+        imp = measure_impacts(tt, ph, pd_, intact=intact, **measure)
+        if overturned:
+            imp = [r for r in imp if r["t"] <= t_over]
+        n_imp = len(imp)
+        if keep == "all":
+            ev.extend(imp)
     if status == "ok":
         if max_pen > cfg.max_penetration:
             status, reason = "diverged", (f"penetration {max_pen:.3g} m > max_penetration "
@@ -521,7 +583,10 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                                          cfg.energy_gain_tol, alpha)
             if reason is not None:
                 status = "diverged"
-            else:
+            elif imp is not None:
+                status, reason = _unmeasured(imp, cfg)
+            elif n_imp >= 2 and not _first_eta_finite(tt, ph, pd_, intact, exc, measure):
+                imp = measure_impacts(tt, ph, pd_, intact=intact, **measure)
                 status, reason = _unmeasured(imp, cfg)
         if status == "ok":
             reason = _frozen(scene, motion, ref, tt, ph, intact.astype(bool), phi0, t0,
@@ -548,7 +613,7 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
         overturned=overturned, t_overturn=t_over,
         exceeded_critical=overturned or _exceeded(ph, crit, intact_b),
         uplifted=uplifted, t_uplift=t_up,
-        n_impacts=len(impacts), fractured=stepped.fractured,
+        n_impacts=n_imp, fractured=stepped.fractured,
         t_fracture=stepped.t_fracture, status=status, reason=reason,
         eta_measured=[_eta(r) for r in impacts],
         max_penetration=max(max_pen, pen_all), max_sliding=max(max_slide, sl_all),
@@ -558,13 +623,47 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     out_settings = asdict(cfg)
     out_settings["engine_version"] = engine_version
     if keep == "summary":
-        return Outcome(backend=backend_name, summary=summary, cost=cost, impacts=impacts,
+        return Outcome(backend=backend_name, summary=summary, cost=cost, impacts=[],
                        settings=out_settings)
     events = events_frame(rows)
     return Result(backend=backend_name, scene=scene,
                   motion=motion.describe() if motion is not None else {"kind": "none"},
                   history=history, events=events, summary=summary, cost=cost,
                   settings=out_settings)
+
+
+def impact_arguments(scene: Scene, motion, settings, free: bool) -> dict[str, Any]:
+    """The keyword arguments (but ``intact``) of :func:`~rockbench.measure.measure_impacts`
+    for an engine run of ``scene`` under ``motion`` (None: free rocking) with ``settings``
+    (``uplift_tol``); ``free``: no ground motion and no devices. Impacts: the energy of
+    successive peaks in free rocking; otherwise the mechanism's own equation of motion (device
+    forces, ground motion) integrated from either side of each impact to phi = 0
+    (``docs/metrics.md``)."""
+    alpha = scene.alpha
+    dyn = reference_of(scene).dyn
+    energy = inertia0 = None
+    if free:
+        energy = lambda p: dyn[1 if p > 0 else -1].energy(p, 0.0)  # noqa: E731
+        inertia0 = lambda s: dyn[s].terms(0.0).inertia  # noqa: E731
+    return dict(alpha=alpha, free=free, energy=energy, inertia0=inertia0,
+                uplift_tol=settings.uplift_tol * alpha,
+                rest_rate=settings.uplift_tol * alpha * scene.p, dynamics=dyn,
+                ground_acc=motion.acceleration if motion is not None else None,
+                closure=closure_function(scene, motion))
+
+
+def _first_eta_finite(t, phi, phidot, intact, exc: list, measure: dict) -> bool:
+    """Whether the run's first impact has a finite eta, measured by
+    :func:`~rockbench.measure.measure_impacts` (arguments ``measure``) on the samples up to
+    the last of the excursion it begins: an impact's measurement reads only the samples of the
+    two excursions around it, so this is the full history's first impact bit for bit
+    (``tests/engines/test_map_path.py``)."""
+    first = next((x for x in exc if x.after_impact), None)
+    if first is None:
+        return False
+    m = first.i1 + 1
+    rows = measure_impacts(t[:m], phi[:m], phidot[:m], intact=intact[:m], **measure)
+    return len(rows) == 1 and math.isfinite(_eta(rows[0]))
 
 
 def _unmeasured(impacts: list, cfg) -> tuple[str, str | None]:
