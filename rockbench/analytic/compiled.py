@@ -20,12 +20,15 @@ Design (measured choices, see ``benchmarks/results/compiled_analytic.md``):
   estimate and 7th-order dense output (Dormand-Prince 8(5,3), "DOP853") that the reference path
   uses through ``scipy.integrate.solve_ivp``, with the same step-size controller and the same
   tolerances (``AnalyticSettings.rtol``/``atol``, 1e-10 / 1e-12 by default); the Butcher tableau
-  is read at import time from scipy's own coefficient table. Unlike ``solve_ivp``, which starts
-  every segment with its initial-step selection, the step size is kept across impacts and
-  fractures (the first step after an impact at most |phi' / phi''|, short of the excursion's
-  peak, so that it cannot step over the return to phi = 0); only an uplift from rest selects an
-  initial step. The two paths therefore do not track each other step for step: they agree to
-  the integration tolerance on every well-conditioned quantity (docs/reproducibility.md).
+  is read at import time from scipy's own coefficient table. Like ``solve_ivp``, every segment
+  (after an uplift, an impact or a fracture) starts from scipy's initial-step selection: a step
+  kept across impacts was 1.13 x cheaper but stepped over short excursions of a hybrid frame
+  (``kernel_run._run``). The step attempt and the dense output's extra stages are inlined once
+  per form of phi'' (``kernel_run._f``): a parallelogram frame under a Ricker pulse in its block
+  form, a tabulated frame under a pulse from its table (a step that reaches beyond the table is
+  redone with the exact closure), anything else through a call. A stage loop without a call is
+  1.3 x faster per step (``benchmarks/results/analytic_floor.md``); the numbers are the same to
+  the last bit.
 * Events are located as ``solve_ivp`` does: a sign change of the event function between two
   accepted steps (with the event's direction), then Brent's method on the dense output to
   4 machine epsilons; events after the first terminal one in a step are dropped.

@@ -438,6 +438,46 @@ def test_no_step_over_a_short_excursion_after_an_impact(scene, cell, n):
         assert_same_run(simulate_compiled(scene, m, settings=MINIMAL), ref, scene)
 
 
+@pytest.mark.parametrize("name,form", [("paper-symmetric", 2), ("paper-asymmetric", 3),
+                                       ("paper-asymmetric-hybrid-eps1", 3),
+                                       ("paper-symmetric-hybrid", 0), ("housner-block", 0)])
+def test_step_forms_equal_the_general_form(name, form):
+    """The step loop's specialised forms of phi'' (kernel_run._f: 2 a parallelogram frame's
+    block form, 3 a tabulated frame's table, both under a Ricker pulse) give the general form's
+    numbers to the last bit, over both pulses and directions and s phi from -0.05 rad to the
+    fall angle; form 3 is NaN exactly where the table ends (the step is then redone with the
+    general form). A frame whose devices act (the hybrid symmetric one) and a block take the
+    general form."""
+    from rockbench.analytic.kernel_run import _f, _f_general, _form
+    scene = load_scene(name)
+    ref = reference_of(scene)
+    geo, _ = compiled.scene_arrays(scene)
+    kin = np.zeros((3, 7))
+    hint = np.zeros(1, dtype=np.int64)
+    empty = np.zeros(1)
+    beyond = 0
+    for mk, shape in ((1, "symmetric"), (2, "antisymmetric")):
+        m = RickerPulse.dimensionless(2.5, 3.0, scene.structure, shape, 1)
+        _, mp, *_ = compiled._motion_arrays(m)
+        for i, s in enumerate((1, -1)):
+            g = geo[i]
+            dev = g[27] > 0.0 or g[28] > 0.0         # intact: the devices act if present
+            assert _form(g, True, mk) == form
+            assert _form(g, True, 3) == 0            # a record: the general form
+            for k, x in enumerate(np.linspace(-0.05, ref.fall[s], 97)):
+                t = m.t_start + (m.t_end - m.t_start) * k / 96
+                want = _f_general(t, s * x, 0.3 - 0.01 * k, mk, mp, empty, empty, hint, g, True,
+                                  kin)
+                got = _f(t, s * x, 0.3 - 0.01 * k, form, g[40], g[41], g[42], mk, mp[0], mp[1],
+                         mp[4], g, True, dev, kin, mp, empty, empty, hint)
+                if form == 3 and not (g[45] <= s * g[44] * x <= g[46]):
+                    assert math.isnan(got)
+                    beyond += 1
+                else:
+                    assert got == want, (s, x, got, want)
+    assert form != 3 or beyond > 0
+
+
 # --- the rules are mirrored, and read when a run starts ------------------------------------------
 def test_chatter_rule_is_mirrored(monkeypatch):
     """With the chatter rule disabled both paths step through the same longer impact sequence."""
