@@ -7,3 +7,8 @@ G = 9.81
 #: Standard gravity [m/s^2], used only to convert accelerograms given in units of g
 #: (PEER AT2 files), so that PGAs match the values the data providers publish.
 G_STANDARD = 9.80665
+
+#: Free rocking [s] simulated after the ground motion ends (or from the initial tilt of a
+#: free-rocking run) when no duration is given: the default run length of every backend and
+#: path is the motion's length + FREE_TAIL.
+FREE_TAIL = 10.0

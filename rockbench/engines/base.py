@@ -172,6 +172,7 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
     engine steps = duration / ``settings.dt`` must be within the limits ``max_samples`` and
     ``max_steps`` of :mod:`rockbench.limits` (the error names the override).
     """
+    from ..constants import FREE_TAIL
     from ..errors import check_finite
     from ..limits import check_size
     from ..scene.motion import GroundMotion
@@ -183,7 +184,7 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
     t0 = float(motion.t_start) if motion is not None else 0.0
     given = duration is not None
     if duration is None:
-        duration = (max(motion.t_end - t0, 0.0) if motion is not None else 0.0) + 10.0
+        duration = (max(motion.t_end - t0, 0.0) if motion is not None else 0.0) + FREE_TAIL
     duration = check_positive("duration", duration)
     phi0 = check_finite("phi0", phi0)
     if phi0 != 0.0:
@@ -198,7 +199,7 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
         raise ParameterError("phi0", phi0, "non-zero for a free-rocking run (no ground motion)")
     if settings is not None:
         shown: Any = duration if given else (f"{duration:g} s (the default: the motion's "
-                                             f"{duration - 10.0:g} s + 10 s)")
+                                             f"{duration - FREE_TAIL:g} s + {FREE_TAIL:g} s)")
         output_dt = getattr(settings, "output_dt", None)
         if isinstance(output_dt, (int, float)) and output_dt > 0:
             n = duration / output_dt

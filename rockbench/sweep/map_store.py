@@ -108,6 +108,7 @@ def store_inputs(scene, scene_ref: str, engine: str, settings: dict, method: str
     (a store written by other code is refused); without it the store is keyed by the inputs
     and the engine's version only, and its reuse must be verified by re-running sample cells
     (:func:`reuse_map`)."""
+    from ..constants import FREE_TAIL
     from ..engines import engine_info
     from .store import code_fingerprint
 
@@ -115,7 +116,7 @@ def store_inputs(scene, scene_ref: str, engine: str, settings: dict, method: str
            "engine_version": next((str(r.get("version", r.get("reason")))
                                    for r in engine_info([engine])), ""),
            "settings": {k: settings[k] for k in sorted(settings)}, "method": method,
-           "duration": f"pulse window (6 T_g) + {10.0 if tail is None else tail:g} s"}
+           "duration": f"pulse window (6 T_g) + {FREE_TAIL if tail is None else tail:g} s"}
     if keyed_by_code:
         out["code"] = code_fingerprint()
     return out
