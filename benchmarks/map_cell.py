@@ -15,16 +15,19 @@ median of ``--repeat`` passes with min-max spread, after one untimed pass:
   events and measurement frames) and the scene loaded again for every cell; MuJoCo also
   batched in ``mujoco.rollout`` running every case to the end of its window
   (``VERDICT_CHUNK`` set beyond the window);
-* ``after``: the map path - ``keep="summary"`` (``rockbench.engines.loop.finish``), the scene
-  loaded once per process; MuJoCo batched (one thread, stopped at the verdict) and plain (the
-  compiled loop).
+* ``after``: the map path - ``keep="summary"`` (``rockbench.engines.loop.finish``: no history
+  or events frames; impacts counted, their eta measured only where a verdict needs it; the
+  compiled loop back in Python every ``DRIVE_CHUNKS`` probe chunks), the scene loaded once per
+  process; MuJoCo batched (one thread, stopped at the verdict) and plain (the compiled loop).
 
-``ratio`` = the path's CPU time / raw C. Writes ``map_cell.md`` with the machine.
+``ratio`` = the path's CPU time / raw C. Writes ``map_cell.md`` with the machine and its load
+average (1 min) before and after the measurement.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
@@ -137,6 +140,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = ap.parse_args(argv)
     have = rb.available_backends()
+    load0 = os.getloadavg()[0]
     n = len(cells("pymunk"))
     lines = [f"{n} cells of `{SCENE}` (A in 1.5, 3, 6; W in 3, 6; symmetric+ and "
              "antisymmetric-; pulse window + 10 s): process CPU s per cell, median (min-max) "
@@ -178,6 +182,7 @@ def main(argv=None) -> int:
                          f"{med / raw[0]:.3g} |")
             print(lines[-1], flush=True)
     mc = machine()
+    mc["load average (1 min) before / after"] = f"{load0:.2f} / {os.getloadavg()[0]:.2f}"
     text = ("# A map cell against the engine's own stepping (issue 27 section 3)\n\n"
             f"Measured side by side in one run of `benchmarks/map_cell.py --repeat "
             f"{args.repeat}` on a machine shared with other processes (process CPU time, so "

@@ -7,9 +7,10 @@ several more in the calls around it; a run spent most of its time in rockbench's
 fracture check, the overturn check, the engine's step, the state read, the output samples with
 their linear interpolation - calling the engine's exported C functions by address (found with
 ``ctypes`` in the engine's own library) on the world the adapter built. It returns to Python
-every :data:`~rockbench.engines.loop.PROBE_CHUNK` samples for the divergence checks, exactly
-where the Python loop runs them, and the driver :func:`rockbench.engines.loop._drive` turns
-its events into the same :class:`~rockbench.engines.loop.Stepped`.
+every ``DRIVE_CHUNKS`` x :data:`~rockbench.engines.loop.PROBE_CHUNK` samples; the driver
+:func:`rockbench.engines.loop._drive` runs the divergence checks on the Python loop's chunks
+(a failed one ends the run where the Python loop ends it) and turns the kernel's events into
+the same :class:`~rockbench.engines.loop.Stepped`.
 
 One kernel serves every engine (``kind``): engine-specific data travel in the tuple ``eng``
 (:func:`chipmunk_engine`, :func:`rockbench.engines.mujoco.MujocoBackend._compiled_loop`), so

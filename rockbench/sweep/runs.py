@@ -30,7 +30,7 @@ def _now() -> str:
 
 def _result_fields(result) -> dict[str, Any]:
     """The row fields of a Result, or of an :class:`~rockbench.engines.loop.Outcome` (what a
-    map keeps: the same summary and cost, the impacts as rows) - the same numbers."""
+    map keeps: the same summary and cost but no eta measured, so its eta means are NaN)."""
     s, c = result.summary, result.cost
     if isinstance(result.impacts, list):          # an Outcome
         direction = np.array([r.get("direction") or 0 for r in result.impacts], dtype=np.int64)
@@ -103,7 +103,8 @@ def run_case(case: Mapping[str, Any], keep: str = "all") -> dict[str, Any]:
     """Run one case; return its row (never raises for a failure of the run itself: an
     exception becomes status ``"error"`` with ``reason`` = the exception's type and message).
     ``keep="summary"`` (engines; what maps use): the run keeps only its summary
-    (:func:`rockbench.engines.loop.finish`), the row is the same.
+    (:func:`rockbench.engines.loop.finish`): the same row but for the eta means (NaN: a map
+    does not measure eta).
 
     Row keys: ``case_id``, the flattened case, ``status``, ``reason``, the Result's summary
     (``max_abs_phi`` [rad], ``max_abs_phi_over_alpha``, ``overturned``, ``t_overturn`` [s], ...),
@@ -285,7 +286,8 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
         MuJoCo batch) as it finishes, after the store has them (e.g. to keep them elsewhere).
     keep : {"all", "summary"}
         "summary" (engine cases only; what maps use): each run keeps only its summary - the
-        same rows, without building a history frame (:func:`rockbench.engines.loop.finish`).
+        same rows but for the eta means (NaN), without building a history frame or measuring
+        the impacts' eta (:func:`rockbench.engines.loop.finish`).
 
     Columns: ``case_id``, the flattened case (``scene``, ``overrides.<k>``, ``engine``,
     ``settings.<k>``, ``motion.kind``, ``motion.<k>``, ``phi0`` [rad], ``duration`` [s]), then
