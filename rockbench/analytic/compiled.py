@@ -453,6 +453,9 @@ def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = No
     cpu = (time.process_time() - c0) / max(n, 1)
     st = res[:, _O_STATUS].astype(int)
     over = res[:, _O_OVER] != 0.0
+    reason = np.full(n, None, dtype=object)
+    for i in np.flatnonzero(st != 0):
+        reason[i] = _reason(int(st[i]), res[i], rp, float("nan"))
     return pd.DataFrame({
         "amplitude": As, "frequency": Ws,
         "pulse": np.where(shapes == 1, "symmetric", "antisymmetric"),
@@ -462,6 +465,6 @@ def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = No
         "uplifted": res[:, _O_UPL] != 0.0,
         "t_overturn": np.where(over, res[:, _O_TOVER], np.nan),
         "status": np.where(st == 0, "ok", "invalid"),
-        "reason": [_reason(int(c), res[i], rp, float("nan")) for i, c in enumerate(st)],
+        "reason": reason,
         "cpu_s": np.full(n, cpu),
-    }, columns=list(MAP_COLUMNS))
+    })    # keys in MAP_COLUMNS's order (reordering by columns= costs 0.1 ms a call)
