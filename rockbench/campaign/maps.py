@@ -104,7 +104,7 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
         for g in dict.fromkeys((fg, mg)):
             path = measured / f"{lab}_{eng}_{g[0]}x{g[1]}.parquet"
             df, w = reuse_map(path, sc, eng, **dict(axes, grid=g))
-            if df is not None:
+            if df is not None and not (full and g != fg):   # --full wants the finest
                 return df, g, w
             whys.append(w)
         why = whys[-1] if len(whys) == 1 else f"{whys[0]}; {whys[1]}"
