@@ -45,7 +45,9 @@ def run(scene: Scene, motion=None, *, engine: str = "analytic",
     settings : the backend's Settings, optional; ``setting_overrides`` replace single fields
         (e.g. ``dt=2e-4``).
     keep : "all" (default: the Result) or "summary" (engines only: what a map keeps, an
-        :class:`~rockbench.engines.loop.Outcome` with the same summary, no history frame).
+        :class:`~rockbench.engines.loop.Outcome` with the same summary but ``eta_measured``,
+        which is empty: impacts are counted, eta is measured only where a verdict needs it;
+        no history frame).
     """
     _check_scene(scene)
     _check_motion(motion)
