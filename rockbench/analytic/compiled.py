@@ -207,6 +207,7 @@ def _tabulate(row: np.ndarray, dyn, s: int, fall: float) -> None:
             row[base + f * (d + 1): base + (f + 1) * (d + 1)] = C.cheb2poly(cheb)[::-1]
     row[0] = 3.0
     row[44], row[45], row[46], row[47], row[48], row[49] = s, lo, hi, du, n, d
+    row[43] = 1.0 / du
 
 
 def _thresholds(sc: np.ndarray) -> tuple[float, float]:

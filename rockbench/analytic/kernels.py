@@ -219,16 +219,17 @@ def _estrin11(g, b, x, x2, x4, x8):
 @njit(cache=True, inline="always")
 def _tabulated(u, pd, ag, g, dev):
     """phi'' from the tabulated terms of a frame (``g[0] == 3``, compiled.scene_arrays):
-    u = s phi in [g[45], g[46]] split into g[48] equal intervals of width g[47], each with
+    u = s phi in [g[45], g[46]] split into g[48] equal intervals of width g[47] (g[43] =
+    1 / g[47]), each with
     polynomials of degree g[49] in the interval's local coordinate x in [-1, 1] for I, J, G, B,
     sum e de/dphi and sum (dc/dphi)^2 (coefficients from g[_TAB0], highest degree first)."""
     du = g[47]
     n = int(g[48])
     d = int(g[49])
-    i = int((u - g[45]) / du)
+    i = int((u - g[45]) * g[43])          # g[43] = 1 / du: no division on the way to x
     if i >= n:
         i = n - 1
-    x = 2.0 * (u - g[45] - i * du) / du - 1.0
+    x = 2.0 * (u - g[45] - i * du) * g[43] - 1.0
     base = _TAB0 + i * 6 * (d + 1)
     K = 0.0
     D = 0.0
