@@ -36,7 +36,7 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     stability sweep runs in its fast form (``full``: the full form; ``quick``: none)."""
     from ..studies.advise import advice_for_report
     from ..scene.scene import load_scene
-    from ..studies.robustness import breaking_points, stress
+    from ..studies.robustness import AXES, axis_label, base_values, breaking_points, stress
     from ..studies.tradeoff import tradeoff
 
     names = [e for e in engines if e != "analytic"]
@@ -53,12 +53,19 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                  self_consistency="none", workers=workers, store=store / "tradeoff",
                  progress=progress)
     advice = advice_for_report(t.table)
-    st = None if quick else stress(names, full=full, workers=workers, progress=progress,
-                                   scene=stress_scene, hybrid=stress_hybrid).table
+    sw = None if quick else stress(names, full=full, workers=workers, progress=progress,
+                                   scene=stress_scene, hybrid=stress_hybrid)
+    st = None if sw is None else sw.table
     label = getattr(load_scene(scene), "name", str(scene))
+    # the stability sweep's base, by its own name (the paper's frame when the plan names none)
+    stress_base = load_scene(stress_scene if stress_scene is not None else "paper-asymmetric")
     return {"tradeoff": t.table, "advice": advice, "stress": st, "stress_full": full,
             "breaks": breaking_points(st, stress_scene) if st is not None else None,
-            "words": recommendation(advice, label), "scene": label}
+            "words": recommendation(advice, label), "scene": label,
+            "stress_base": stress_base.name,
+            "stress_labels": {a: axis_label(a) for a in [*AXES, "paper", "base"]},
+            "stress_base_values": base_values(stress_scene),
+            "stress_skipped": {} if sw is None else sw.skipped}
 
 
 def recommendation(advice: pd.DataFrame, scene: str = CHOICE_SCENE) -> list[str]:

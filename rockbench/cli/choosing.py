@@ -175,30 +175,49 @@ def cmd_advise(args: argparse.Namespace) -> int:
 def cmd_stress(args: argparse.Namespace) -> int:
     from .common import output_folder, pandas_display, print_json, write_atomic
     from ..report.tradeoff_figures import plot_stability_map
-    from ..studies.robustness import breaking_points, stress
+    from ..scene.scene import load_scene
+    from ..studies.robustness import AXES, axis_label, base_values, breaking_points, stress
 
     engines = engine_names(args)
     if args.out:
         output_folder(Path(args.out) / "stress.csv", "--out")
     scene = getattr(args, "scene", None)
-    if scene is not None:
-        from ..scene.scene import load_scene
-        load_scene(scene)                    # a bad scene fails before anything runs
+    # a bad scene fails before anything runs; the base is named by its own name
+    base = load_scene(scene if scene is not None else "paper-asymmetric").name
     s = stress(engines, full=args.full, axes=args.axes, progress=not args.quiet,
                scene=scene, **_executor(args))
     if args.out:
         write_atomic({Path(args.out) / "stress.csv": s.table}, "--out")
+        labels = {a: axis_label(a) for a in [*AXES, "paper", "base"]}
         for eng in dict.fromkeys(s.table["engine"]):
-            _png(plot_stability_map(s.table, eng), Path(args.out) / f"stability_{eng}.png")
+            _png(plot_stability_map(s.table, eng, base=base, labels=labels,
+                                    base_values=base_values(scene)),
+                 Path(args.out) / f"stability_{eng}.png")
     if args.json:
         print_json(s.to_json())
         return 0
     cols = ["engine", "axis", "value", "class", "error", "status", "flags", "reason"]
     with pandas_display():
-        print(s.table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-        print("\nfirst break away from the " + ("paper's frame" if scene is None else
-              f"base scene {scene}") + ", per engine and axis:")
+        print(_left_text(s.table[cols], ("flags", "reason")).to_string(
+            index=False, float_format=lambda v: f"{v:.3g}"))
+        print("axes and units: " + "; ".join(axis_label(a) for a in dict.fromkeys(
+            s.table["axis"])) + " (error: relative to the analytic model, -)")
+        for label, why in s.skipped.items():
+            print(f"not run: {label}: its structure is refused by the model ({why})")
+        print(f"\nfirst break away from {base}" + (" (the paper's frame)" if scene is None
+              else "") + ", per engine and axis:")
         b = breaking_points(s.table, scene)
-        print(b.to_string(index=False) if len(b) else "none: every point within 5 % or "
-              "outside the analytic model")
+        print(_left_text(b, ("reason",)).to_string(index=False) if len(b) else
+              "none: every point within 5 % or outside the analytic model")
     return 0
+
+
+def _left_text(df, columns):
+    """``df`` with the text ``columns`` left-aligned when printed (pandas right-aligns them,
+    which pushes a long reason far to the right of its row)."""
+    out = df.copy()
+    for c in columns:
+        if c in out and len(out):
+            w = int(out[c].astype(str).str.len().max())
+            out[c] = out[c].astype(str).str.ljust(w)
+    return out

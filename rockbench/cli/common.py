@@ -116,7 +116,8 @@ def add_motion_options(p: argparse.ArgumentParser) -> None:
     x.add_argument("--pulse", choices=("symmetric", "antisymmetric"),
                    help="Ricker pulse shape (paper Eq. 29 / Eq. 30)")
     x.add_argument("--record", metavar="FILE",
-                   help="accelerogram: a PEER .AT2 file or a headerless column file")
+                   help="accelerogram: a PEER .AT2 file, a headerless column file, or the "
+                        "name of a bundled record (e.g. IV1940_ElCentro_180; docs/records.md)")
     x.add_argument("--phi0", type=arg_nonzero, metavar="RAD",
                    help="free rocking from phi0 = RAD radians (!= 0, + counterclockwise), "
                         "as rockbench.run(phi0=...)")
@@ -314,6 +315,21 @@ def backend_overrides(engine: str, args: argparse.Namespace) -> dict[str, Any]:
     return engine_settings(list(args.settings), [engine], dt=args.dt).get(engine, {})
 
 
+def _bundled_record_path(text: str) -> Path:
+    """The file of the bundled record named ``text`` (its file stem, case-insensitive, as
+    :func:`rockbench.load_bundled` takes it), for a ``--record`` that is not a file; a
+    RecordError naming the option, the value and the bundled names otherwise."""
+    from ..scene.records import bundled_records
+
+    records = bundled_records()
+    key = str(text).strip().lower()
+    for r in records:
+        if r["name"].lower() in (key, key.removesuffix(".at2")):
+            return Path(r["path"])
+    raise RecordError(f"--record: {str(text)!r} is neither a file nor a bundled record "
+                      f"(one of {', '.join(r['name'] for r in records)})")
+
+
 def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
     """(ground motion or None, phi0 [rad]) from the motion options: ``--pulse``, ``--record``
     (a headerless file takes --record-dt and --record-units, or its line of the ``records.csv``
@@ -356,7 +372,7 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
 
         path = Path(args.record)
         if not path.is_file():
-            raise RecordError(f"--record: file {str(path)!r} does not exist")
+            path = _bundled_record_path(args.record)
         listed = None
         if path.suffix.lower() != ".at2" and (args.record_dt is None or args.record_units is None):
             from ..scene.records import listed_metadata

@@ -104,7 +104,10 @@ def cmd_fragility(args: argparse.Namespace) -> int:
         print_json(out)
         return 0
     im = out["intensity"]
-    print(f"{frag.scene}: {out['records']} records x 2 polarities x {len(frag.scales)} scales "
+    from ..scene.scene import load_scene
+
+    name = load_scene(args.scene).name               # the scene's own name, not its file
+    print(f"{name}: {out['records']} records x 2 polarities x {len(frag.scales)} scales "
           f"({frag.scales[0]:g} to {frag.scales[-1]:g}); intensity {im['name']} [{im['unit']}]; "
           f"95 % intervals from {out['n_boot']} bootstrap resamples of the records")
     for b, v in out["backends"].items():
@@ -112,7 +115,7 @@ def cmd_fragility(args: argparse.Namespace) -> int:
               f"dispersion {v['dispersion']:.3g} {_interval(v['dispersion_ci'])}, "
               f"{v['overturned']} of {v['runs'] - v['not_ok']} runs overturned"
               + (f", {v['not_ok']} not ok" if v["not_ok"] else "")
-              + (f" ({v['note']})" if v["note"] else ""))
+              + (f" ({v['note']}; intensities in {im['unit']})" if v["note"] else ""))
     for b, v in out["backends"].items():
         if "verdict" in v:
             print(v["verdict"])

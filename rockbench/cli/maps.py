@@ -227,7 +227,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
         return 0
     how = (f", {summary['cells_run']} simulated now, {summary['inferred']} inferred"
            if args.adaptive else "")
-    print(f"{args.scene}, {args.engine}: {summary['cells']} cells ({summary['reused']} reused "
+    name = df.attrs.get("scene", args.scene)          # the scene's own name, not its file
+    print(f"{name}, {args.engine}: {summary['cells']} cells ({summary['reused']} reused "
           f"from {store}{how}), {summary['overturned']} overturn, {summary['not_ok']} not ok")
     if figure is not None:
         print(f"figure: {figure}")

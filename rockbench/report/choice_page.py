@@ -55,7 +55,8 @@ def choice_html(choice: Mapping[str, Any], figdir, *, with_work_precision: bool 
     if tab is not None and len(tab) and with_work_precision:
         parts.append(H.figure_html(
             plot_work_precision(tab),
-            "Work-precision on paper-asymmetric (the quick evidence of rockbench advise: free "
+            f"Work-precision on {choice.get('scene', 'the scene')} (the quick evidence of "
+            "rockbench advise: free "
             "rocking from small and large angles, pulse cells across the A-W plane away from "
             "and near the overturning boundary, scaled records; both parts, choice and "
             "held-out): worst error against the analytic model [-] against the steady-state "
@@ -71,19 +72,29 @@ def choice_html(choice: Mapping[str, Any], figdir, *, with_work_precision: bool 
                      + H.html_table(shown, list(shown.columns), graded=False))
     st = choice.get("stress")
     br = choice.get("breaks")
+    base = choice.get("stress_base") or "the base scene"
     if br is not None and len(br):
         parts.append("<h3>Where each engine breaks first</h3><p>Per engine and axis, going away "
-                     "from the paper's frame on either side, the first value at which the run "
+                     f"from {H.escape(base)} on either side, the first value at which the run "
                      "is off (beyond 5 % of the analytic model, or flagged), diverged or "
                      "invalid; points where the analytic model itself stops applying are "
                      "skipped (stress_breaking_points.csv; every point: stress.csv).</p>"
                      + H.html_table(br, list(br.columns), graded=False, scroll=True))
+    skipped = choice.get("stress_skipped") or {}
+    if skipped:
+        parts.append(f"<p>Not run: points whose structure the model refuses (they say nothing "
+                     f"about an engine) from {H.escape(base)}: "
+                     + "; ".join(f"{H.escape(k)} ({H.escape(v)})" for k, v in skipped.items())
+                     + ".</p>")
     if st is not None and len(st):
         for eng in [e for e in dict.fromkeys(st["engine"])]:
             parts.append(H.figure_html(
-                plot_stability_map(st, eng), f"{eng}: where it stays within 1 % and 5 % of "
+                plot_stability_map(st, eng, base=base, labels=choice.get("stress_labels"),
+                                   base_values=choice.get("stress_base_values")),
+                f"{eng}: where it stays within 1 % and 5 % of "
                 "the analytic model, where it breaks, and where the analytic model itself stops "
-                "applying, one axis at a time from the paper's frame (rockbench stress, "
+                f"applying, one axis at a time from {base} (dashed: its own value; rockbench "
+                "stress, "
                 + ("full form" if choice.get("stress_full") else "fast form; the full form: "
                    "rockbench report --full or rockbench stress --full") + ").",
                 name=f"stability_{eng}", png_dir=figdir))

@@ -37,10 +37,15 @@ def _edges(x: np.ndarray) -> np.ndarray:
 
 
 def plot_map_panels(df: pd.DataFrame, *, title: str) -> Figure:
-    """The four panels of one map: overturning region (red) and, where the frame survives,
-    max |phi| / alpha (blue shades), on W = omega_g / p (x) and A = a_g / (g tan alpha) (y)."""
+    """The four panels of one map: overturning region (red) and, where the structure
+    survives, max |phi| / alpha (blue shades, colour bar), on W = omega_g / p (x) and
+    A = a_g / (g tan alpha) (y). Cells an adaptive map inferred instead of simulating
+    (``inferred`` column) carry a verdict but no max |phi|: they are grey (survives) or red,
+    never white, which would read as a structure at rest."""
     fig = Figure(figsize=(11, 8.5))
     axes = fig.subplots(2, 2, sharex=True, sharey=True)
+    mesh = None
+    inferred = "inferred" in df and bool(df["inferred"].fillna(False).astype(bool).any())
     for ax, (shape, sign, label) in zip(axes.ravel(), PANELS):
         ot = _pivot(df, shape, sign)
         ax.set_title(label, fontsize=10)
@@ -50,8 +55,14 @@ def plot_map_panels(df: pd.DataFrame, *, title: str) -> Figure:
         pk = _pivot(df, shape, sign, "max_abs_phi_over_alpha")
         W, A = ot.columns.to_numpy(float), ot.index.to_numpy(float)
         surv = np.where(ot.to_numpy() == 0, np.clip(pk.to_numpy(), 0, 1), np.nan)
-        ax.pcolormesh(_edges(W), _edges(A), surv, cmap="Blues", vmin=0, vmax=1.2,
-                      shading="flat")
+        mesh = ax.pcolormesh(_edges(W), _edges(A), surv, cmap="Blues", vmin=0, vmax=1.2,
+                             shading="flat")
+        if inferred:
+            guess = _pivot(df, shape, sign, "inferred").to_numpy().astype(float)
+            grey = np.where((ot.to_numpy() == 0) & (guess == 1) & np.isnan(pk.to_numpy()),
+                            1.0, np.nan)
+            ax.pcolormesh(_edges(W), _edges(A), grey, cmap=ListedColormap(["#d5d8dc"]),
+                          shading="flat")
         over = np.where(ot.to_numpy() == 1, 1.0, np.nan)
         ax.pcolormesh(_edges(W), _edges(A), over, cmap=ListedColormap(["#c0392b"]),
                       shading="flat")
@@ -61,9 +72,13 @@ def plot_map_panels(df: pd.DataFrame, *, title: str) -> Figure:
         ax.set_xlabel("W = omega_g / p [-]")
     for ax in axes[:, 0]:
         ax.set_ylabel("A = a_g / (g tan alpha) [-]")
-    fig.suptitle(title + "  (red: overturns; blue: max |phi| / alpha of a surviving frame)",
-                 fontsize=11)
+    fig.suptitle(title + "\nred: overturns; blue: max |phi| / alpha of a surviving "
+                 "structure" + ("; grey: survives, inferred by the adaptive map, not simulated"
+                                if inferred else ""), fontsize=11)
     fig.tight_layout()
+    if mesh is not None:
+        fig.colorbar(mesh, ax=list(axes.ravel()), shrink=0.6, pad=0.02,
+                     label="max |phi| / alpha of a surviving structure [-] (above 1 drawn as 1)")
     return fig
 
 

@@ -130,11 +130,16 @@ def plot_work_precision(table: pd.DataFrame, *, errors: Sequence[str] = ("worst_
     return fig
 
 
-def plot_stability_map(stress: pd.DataFrame, engine: str, *, title: str | None = None) -> Figure:
+def plot_stability_map(stress: pd.DataFrame, engine: str, *, title: str | None = None,
+                       base: str | None = None, labels: Mapping[str, str] | None = None,
+                       base_values: Mapping[str, float] | None = None) -> Figure:
     """Stability map of one backend: one row per stress axis, its values on a log or linear
     x axis (log when they span more than a factor of 20 and are positive), each point coloured
     by its class (``class`` column: :data:`CLASS_COLORS`). ``stress`` columns: engine, axis,
-    value, class (:data:`rockbench.studies.robustness.STRESS_COLUMNS`)."""
+    value, class (:data:`rockbench.studies.robustness.STRESS_COLUMNS`). ``base``: the name of
+    the scene the axes start from (in the title); ``labels``: axis -> its label with unit
+    (``rockbench.studies.robustness.axis_label``); ``base_values``: axis -> the base scene's
+    value, drawn as a dashed line where it lies in the axis's range."""
     s = stress[stress["engine"] == engine]
     axes_names = list(dict.fromkeys(s["axis"]))
     n = max(1, len(axes_names))
@@ -151,8 +156,13 @@ def plot_stability_map(stress: pd.DataFrame, engine: str, *, title: str | None =
             if m.any():
                 ax.scatter(x[m], np.zeros(m.sum()), s=70, color=col, edgecolor="k", lw=0.4,
                            label=cls, zorder=3)
+        b = (base_values or {}).get(name)
+        if b is not None and np.isfinite(b) and (b > 0 or ax.get_xscale() != "log"):
+            ax.axvline(b, color="0.35", ls="--", lw=0.8, zorder=2,
+                       label="base scene's value")
         ax.set_yticks([])
-        ax.set_ylabel(name, rotation=0, ha="right", va="center", fontsize=8)
+        ax.set_ylabel((labels or {}).get(name, name), rotation=0, ha="right", va="center",
+                      fontsize=8)
         ax.grid(True, axis="x", which="both", lw=0.3, alpha=0.5)
         ax.tick_params(axis="x", labelsize=7)
     handles = [h for ax in axs for h in ax.get_legend_handles_labels()[0]]
@@ -161,6 +171,6 @@ def plot_stability_map(stress: pd.DataFrame, engine: str, *, title: str | None =
     if uniq:
         fig.legend(list(uniq.values()), list(uniq.keys()), loc="outside lower center",
                    ncol=min(6, len(uniq)), fontsize=8)
-    fig.suptitle(title or f"{engine}: stability map (one axis at a time from paper-asymmetric)",
-                 fontsize=10)
+    fig.suptitle(title or f"{engine}: stability map (one axis at a time from "
+                 f"{base or 'the base scene'})", fontsize=10)
     return fig

@@ -620,24 +620,31 @@ def _span(x: pd.Series) -> str:
 
 
 def describe_shift(shift: pd.DataFrame, name: str = "the engine") -> str:
-    """Where a boundary sits relative to the reference, in words (per pulse)."""
+    """Where a boundary sits against the reference, in words, per pulse (and one-sided)."""
     parts = []
     for (p, s), g in shift.groupby(["pulse", "sign"], sort=True):
+        bits, tag = [], f"{p} {'+' if s > 0 else '-'}"
+        for col, other, what in (("a_min_b", "a_min_a", "overturns where the reference "
+                                  "survives every A"), ("a_min_a", "a_min_b", "survives every "
+                                                        "A where the reference overturns")):
+            one = g[g[col].notna() & g[other].isna()]
+            if len(one):
+                bits.append(f"{name} {what}, at W = " + ", ".join(
+                    f"{w:.3g} ({'reference ' * (col == 'a_min_a')}from A = {a:.3g})"
+                    for w, a in zip(one["frequency"], one[col])))
         g = g.dropna(subset=["shift"])
-        if not len(g):
-            continue
-        early = g[g["shift"] < 0]
-        late = g[g["shift"] > 0]
-        tag = f"{p} {'+' if s > 0 else '-'}"
+        early, late = g[g["shift"] < 0], g[g["shift"] > 0]
         if not len(early) and not len(late):
-            parts.append(f"{tag}: same boundary at every frequency")
+            if len(g) or bits:
+                parts.append(f"{tag}: " + ("; ".join(bits) + "; elsewhere the same boundary"
+                                           if bits else "same boundary at every frequency"))
             continue
-        bits = []
+        shifts = []
         if len(early):
-            bits.append(f"earlier (at smaller A, by up to {-early['shift'].min():.3g}) at W = "
-                        + ", ".join(f"{w:.3g}" for w in early["frequency"]))
+            shifts.append(f"earlier (at smaller A, by up to {-early['shift'].min():.3g}) at "
+                          "W = " + ", ".join(f"{w:.3g}" for w in early["frequency"]))
         if len(late):
-            bits.append(f"later (by up to {late['shift'].max():.3g}) at W = "
-                        + ", ".join(f"{w:.3g}" for w in late["frequency"]))
-        parts.append(f"{tag}: {name} overturns " + "; ".join(bits))
+            shifts.append(f"later (by up to {late['shift'].max():.3g}) at W = "
+                          + ", ".join(f"{w:.3g}" for w in late["frequency"]))
+        parts.append(f"{tag}: {name} overturns " + "; ".join(shifts + bits))
     return "; ".join(parts) if parts else "no overturning boundary in both maps"

@@ -43,6 +43,7 @@ from ..errors import ParameterError
 from .tradeoff import classify_error
 
 __all__ = ["AXES", "StressPoint", "stress_points", "run_point", "stress", "Stress",
+           "structure_refusal", "axis_label",
            "breaking_points", "STRESS_COLUMNS", "synthetic_record", "PAPER_VALUES",
            "base_values"]
 
@@ -75,6 +76,20 @@ AXES: dict[str, tuple[str, tuple, tuple]] = {
                (20.0, 100.0)),
 }
 
+def axis_label(axis: str) -> str:
+    """The axis with the unit its :data:`AXES` meaning states, e.g. ``"alpha [rad]"``,
+    ``"tendon [x own]"`` (the device axes scale the scene's own values); the base scene's own
+    points (``paper`` / ``base``) are ``"... [0 free rocking, 1 pulse]"``."""
+    import re
+
+    if axis not in AXES:
+        return f"{axis} [0 free rocking, 1 pulse]"
+    if axis in _DEVICE_AXES:
+        return f"{axis} [x own]"
+    m = re.search(r"\[([^\]]+)\]", AXES[axis][0])
+    return f"{axis} [{m.group(1)}]" if m else axis
+
+
 #: Axes a scene without tendons and dampers has no use for, and those a block has not.
 _DEVICE_AXES = ("tendon", "damper")
 _FRAME_AXES = ("mass_ratio", "H1/H")
@@ -91,8 +106,9 @@ def base_values(scene=None) -> dict[str, float]:
            "A": 2.5, "W": 3.0, "record": math.nan}
     if hasattr(st, "column_height_right"):
         out["H1/H"] = round(st.column_height_right / st.column_height_left, 6)
-        mr = getattr(st, "mass_ratio", None)
-        out["mass_ratio"] = float(mr) if mr is not None else math.nan
+        # the scene's beam / left column mass, however it was given (beam_mass, mass_ratio
+        # or the default solid beam): the base of the mass_ratio axis
+        out["mass_ratio"] = round(float(st.mass_beam / st.mass_left), 6)
     return out
 
 
@@ -388,14 +404,33 @@ def _validity(df: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def structure_refusal(pt: StressPoint) -> str | None:
+    """Why the structure of ``pt`` (its base scene with the point's overrides) is not one the
+    model accepts (the ParameterError or SceneError of loading it), or None when it is one.
+    Such a point says nothing about an engine: e.g. the alpha axis's 0.6 rad asks a frame for
+    columns wider than its span."""
+    from ..errors import SceneError
+    from ..scene.scene import load_scene
+
+    try:
+        load_scene(pt.scene, dict(pt.overrides) or None)
+    except (ParameterError, SceneError) as e:
+        return f"{type(e).__name__}: {e}"
+    return None
+
+
 @dataclass
 class Stress:
     """The stress sweep: ``table`` (one row per engine and point, :data:`STRESS_COLUMNS`),
-    ``full`` (which form), ``unavailable`` (engine -> why)."""
+    ``full`` (which form), ``unavailable`` (engine -> why), ``scene`` (the base scene: None for
+    the paper's frame), ``skipped`` (point label -> why its structure is refused: not run,
+    :func:`structure_refusal`)."""
 
     table: pd.DataFrame
     full: bool = False
     unavailable: dict[str, str] = field(default_factory=dict)
+    scene: Any = None
+    skipped: dict[str, str] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         from ..result import jsonable
@@ -403,7 +438,9 @@ class Stress:
         recs = self.table.astype(object).where(self.table.notna(), None).to_dict("records")
         return jsonable({"full": self.full, "unavailable": self.unavailable,
                           "axes": {k: v[0] for k, v in AXES.items()},
-                          "breaking_points": breaking_points(self.table).to_dict("records"),
+                          "base_values": base_values(self.scene), "skipped": self.skipped,
+                          "breaking_points": breaking_points(self.table,
+                                                            self.scene).to_dict("records"),
                           "rows": recs, "columns": STRESS_COLUMNS})
 
 
@@ -426,6 +463,12 @@ def stress(engines: Sequence[str] | None = None, *, full: bool = False,
         (usable.append(n) if ok else unavailable.__setitem__(n, why))
     pts = (list(points) if points is not None
            else stress_points(full, axes, scene=scene, hybrid=hybrid))
+    skipped = {}
+    for p in pts:
+        why = structure_refusal(p)
+        if why is not None:
+            skipped[p.label] = why
+    pts = [p for p in pts if p.label not in skipped]
     items = [(f"{i}", (n, p)) for i, (n, p) in enumerate((n, p) for p in pts for n in usable)]
     rows: dict[str, dict] = {}
     execute(run_point, items, on_result=lambda k, r: rows.__setitem__(k, r), crashed=_crashed,
@@ -433,7 +476,8 @@ def stress(engines: Sequence[str] | None = None, *, full: bool = False,
             is_error=lambda r: r["class"] in ("diverged", "invalid"), executor=executor,
             workers=workers, progress=progress, desc="stress", unit="run")
     df = pd.DataFrame([rows[k] for k, _ in items], columns=list(STRESS_COLUMNS))
-    return Stress(table=_validity(df), full=full, unavailable=unavailable)
+    return Stress(table=_validity(df), full=full, unavailable=unavailable, scene=scene,
+                  skipped=skipped)
 
 
 def breaking_points(table: pd.DataFrame, scene: Any = None) -> pd.DataFrame:

@@ -1,0 +1,223 @@
+"""Issue 23's acceptance, as a new user: structures the project has never seen (written from
+docs/scenes.md alone) through stress, map, compare and the report's pages. Each test here failed
+before its fix: the stress sweep and its figures named the paper's frame for a user's scene, an
+axis that made the structure impossible was a "break" of every engine, the map figure showed an
+adaptive map's inferred cells as a structure at rest, the boundary words said "same boundary"
+where only one map overturned, and ``--record`` took no bundled record's name."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import rockbench as rb
+from rockbench.cli.main import main
+from rockbench.studies import robustness as S
+
+#: A slender stone pier-and-lintel gateway: unequal piers, the lintel by mass and gyration
+#: radius, tendons and dampers of its own (not the paper's numbers anywhere).
+GATEWAY = """
+name = "stone-gateway"
+description = "slender stone pier-and-lintel gateway"
+[structure]
+type = "frame"
+column_width = 0.55
+column_height_left = 5.2
+column_height_right = 4.9
+span = 3.4
+beam_width = 4.3
+beam_height = 0.9
+beam_mass = 9500.0
+beam_gyration_radius = 1.3
+depth = 0.7
+density = 2650.0
+[devices]
+tendon_stiffness = 4.0e6
+tendon_length = 5.5
+fracture_strain = 0.012
+damping = 3.0e5
+"""
+
+CABINET = """
+name = "museum-cabinet"
+description = "squat display cabinet, 1.0 x 1.6 m"
+[structure]
+type = "block"
+width = 1.0
+height = 1.6
+depth = 0.8
+density = 900.0
+"""
+
+
+@pytest.fixture
+def gateway(tmp_path):
+    p = tmp_path / "gateway.toml"
+    p.write_text(GATEWAY)
+    return str(p)
+
+
+@pytest.fixture
+def cabinet(tmp_path):
+    p = tmp_path / "cabinet.toml"
+    p.write_text(CABINET)
+    return str(p)
+
+
+# --- stress --------------------------------------------------------------------------------
+def test_an_axis_point_whose_structure_is_impossible_is_not_run_nor_a_break(gateway):
+    """alpha = 0.6 rad asks the gateway for 3.56 m wide piers on a 3.4 m span: not a structure,
+    so it says nothing about an engine. It was run, and listed as every engine's first break."""
+    pts = [p for p in S.stress_points(scene=gateway) if p.axis == "alpha"]
+    bad = next(p for p in pts if p.value == 0.6)
+    why = S.structure_refusal(bad)
+    assert why is not None and "span" in why and "column_width" in why
+    assert S.structure_refusal(next(p for p in pts if p.value == 0.05)) is None
+    s = S.stress(["pymunk"], points=[bad], executor="serial", scene=gateway)
+    assert len(s.table) == 0 and list(s.skipped) == ["alpha=0.6"]
+    assert len(S.breaking_points(s.table, gateway)) == 0
+
+
+def test_the_base_values_are_the_scenes_own(gateway):
+    """A beam given by its mass has a mass ratio all the same (beam / left column mass): the
+    side of the mass_ratio axis was lost (NaN) for it."""
+    sc = rb.load_scene(gateway)
+    v = S.base_values(gateway)
+    assert v["mass_ratio"] == pytest.approx(9500.0 / sc.structure.mass_left, rel=1e-6)
+    assert v["alpha"] == pytest.approx(sc.alpha, abs=1e-4)
+    assert v["H1/H"] == pytest.approx(4.9 / 5.2, rel=1e-6)
+
+
+def _rows(values, classes):
+    return pd.DataFrame([{"engine": "e", "axis": "alpha", "value": v, "class": c, "status": "ok",
+                          "reason": "", "flags": "", "error": 0.1 if c == "off" else 0.001}
+                         for v, c in zip(values, classes)])
+
+
+def test_json_breaking_points_go_away_from_the_users_scene(gateway):
+    """Stress.to_json measured 'below' / 'above' from the paper's alpha (0.142 rad) even for a
+    user's scene: the gateway's alpha is 0.105 rad, so 0.12 lies above it."""
+    t = _rows([0.05, 0.12], ["within 1%", "off"])
+    d = S.Stress(table=t, scene=gateway).to_json()
+    (b,) = d["breaking_points"]
+    assert b["side"] == "above" and b["value"] == 0.12
+    assert d["base_values"]["alpha"] == pytest.approx(0.1054, abs=1e-4)
+
+
+def test_the_stability_map_names_its_base_and_units():
+    from rockbench.report.tradeoff_figures import plot_stability_map
+
+    t = _rows([0.05, 0.12], ["within 1%", "off"])
+    fig = plot_stability_map(t, "e", base="stone-gateway",
+                             labels={"alpha": S.axis_label("alpha")},
+                             base_values={"alpha": 0.1054})
+    assert "stone-gateway" in fig._suptitle.get_text()
+    assert "paper" not in fig._suptitle.get_text()
+    (ax,) = fig.get_axes()
+    assert ax.get_ylabel() == "alpha [rad]"
+    assert any(np.allclose(line.get_xdata(), 0.1054) for line in ax.get_lines())
+    assert "paper" not in plot_stability_map(t, "e")._suptitle.get_text()
+
+
+def test_the_choice_section_of_a_users_report_never_says_the_paper():
+    from rockbench.report.choice_page import choice_html
+
+    t = _rows([0.05, 0.12], ["within 1%", "off"])
+    breaks = S.breaking_points(t, None)
+    html = choice_html({"scene": "stone-gateway", "stress": t, "breaks": breaks,
+                        "stress_base": "stone-gateway",
+                        "stress_labels": {"alpha": "alpha [rad]"},
+                        "stress_base_values": {"alpha": 0.1054},
+                        "stress_skipped": {"alpha=0.6": "ParameterError: span"}},
+                       None)
+    assert "stone-gateway" in html and "paper" not in html.lower()
+    assert "alpha=0.6" in html
+
+
+def test_cli_stress_names_the_scene_and_what_it_skipped(gateway, capsys):
+    """The breaking-point heading named the file path; the skipped point is said."""
+    assert main(["stress", gateway, "--engine", "pymunk", "--axes", "alpha", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "first break away from stone-gateway" in out and gateway not in out
+    assert "not run: alpha=0.6" in out and "alpha [rad]" in out
+
+
+# --- maps ----------------------------------------------------------------------------------
+def test_the_map_figure_shows_inferred_cells_as_inferred():
+    """An adaptive map's inferred cells have a verdict but no max |phi|: they were drawn white,
+    as a structure at rest."""
+    from rockbench.report.map_figures import plot_map_panels
+
+    rows = []
+    for a in (1.0, 2.0):
+        for w in (1.0, 2.0):
+            inf = a == 2.0 and w == 2.0
+            rows.append({"pulse": "symmetric", "sign": 1, "amplitude": a, "frequency": w,
+                         "overturned": False, "status": "ok", "inferred": inf,
+                         "max_abs_phi_over_alpha": math.nan if inf else 0.5})
+    fig = plot_map_panels(pd.DataFrame(rows), title="stone-gateway, analytic")
+    text = fig._suptitle.get_text()
+    assert "inferred" in text and "frame" not in text
+    ax = fig.get_axes()[0]
+    grey = [m for m in ax.collections if np.ma.count(m.get_array()) == 1]
+    assert grey, "the inferred cell is not drawn"
+
+
+def test_boundary_words_say_where_only_one_map_overturns():
+    from rockbench.studies.maps import describe_shift
+
+    shift = pd.DataFrame({"pulse": ["symmetric"] * 2, "sign": [1, 1], "frequency": [1.0, 3.7],
+                          "a_min_a": [2.0, math.nan], "a_min_b": [2.0, 8.0]})
+    shift["shift"] = shift["a_min_b"] - shift["a_min_a"]
+    words = describe_shift(shift, "pymunk")
+    assert "same boundary at every frequency" not in words
+    assert "pymunk overturns where the reference survives every A, at W = 3.7" in words
+
+
+def test_cli_map_names_the_scene(cabinet, tmp_path, capsys):
+    assert main(["map", cabinet, "--grid", "2x2", "--pulses", "symmetric+", "-q",
+                 "--store", str(tmp_path / "m.parquet")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("museum-cabinet, analytic:")
+
+
+# --- records -------------------------------------------------------------------------------
+def test_record_option_takes_a_bundled_records_name(cabinet, capsys):
+    """A user who installed the package does not know where its records live: --record takes a
+    bundled record's name as rb.load_bundled does; an unknown name lists the bundled ones."""
+    assert main(["run", cabinet, "--record", "IV1940_ElCentro_180", "--duration", "3",
+                 "--json"]) == 0
+    import json
+
+    d = json.loads(capsys.readouterr().out)
+    assert d["motion"]["dt_s"] == 0.01
+    assert main(["run", cabinet, "--record", "no-such-record"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--record" in err[0] and "IV1940_ElCentro_180" in err[0]
+
+
+# --- the broken file -----------------------------------------------------------------------
+def test_a_devices_table_without_damping_is_refused_in_one_line(tmp_path, capsys):
+    p = tmp_path / "broken.toml"
+    p.write_text(GATEWAY.replace("damping = 3.0e5\n", ""))
+    assert main(["info", str(p)]) == 2
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert out == "" and len(lines) == 1
+    assert "missing damping" in lines[0] and "N s/m" in lines[0] and "1e+12" in lines[0]
+
+
+def test_cli_fragility_names_the_scene_and_the_notes_unit(cabinet, tmp_path, capsys):
+    """The summary was headed by the file name (cabinet.toml) and its note's intensities had no
+    unit."""
+    assert main(["fragility", cabinet, "--records", "bundled", "--engine", "analytic",
+                 "--scales", "1:8:2", "--boot", "20", "-q", "--store",
+                 str(tmp_path / "f")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("museum-cabinet: 2 records")
+    assert "cabinet.toml" not in out
+    notes = [line for line in out.splitlines() if "median" in line and "(" in line]
+    assert notes and all("intensities in m/s^2" in line for line in notes)
