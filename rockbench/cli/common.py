@@ -317,7 +317,7 @@ def backend_overrides(engine: str, args: argparse.Namespace) -> dict[str, Any]:
 
 def _bundled_record_path(text: str) -> Path:
     """The file of the bundled record named ``text`` (its file stem, case-insensitive, as
-    :func:`rockbench.load_bundled` takes it), for a ``--record`` that is not a file; a
+    :func:`rockbench.scene.records.load_bundled` takes it), for a ``--record`` that is not a file; a
     RecordError naming the option, the value and the bundled names otherwise."""
     from ..scene.records import bundled_records
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Any
 
-from ..errors import ParameterError, check_nonnegative, check_positive
+from ..errors import ParameterError, check_finite, check_nonnegative, check_positive
 from .schema import fields_of
 
 #: smallest fracture strain [-]: 0.01 %, far below any tendon's (steel yields near 0.2 %)
@@ -66,7 +66,8 @@ class Devices:
                            check_positive("tendon_length", self.tendon_length))
         object.__setattr__(self, "damping", check_nonnegative("damping", self.damping))
         if self.fracture_strain is not None:
-            eps = check_positive("fracture_strain", self.fracture_strain)
+            # one message with the whole range (a strain <= 0 said only "> 0")
+            eps = check_finite("fracture_strain", self.fracture_strain)
             if not MIN_FRACTURE_STRAIN <= eps < 1.0:
                 raise ParameterError("fracture_strain", self.fracture_strain,
                                      f"in [{MIN_FRACTURE_STRAIN:g}, 1) or None (no fracture)",
