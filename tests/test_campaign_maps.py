@@ -70,3 +70,48 @@ def test_full_measures_the_paper_resolution_adaptively(fake, tmp_path):
     fake["verified"] = {(100, 100)}                # already there and reproduced: reused
     df, g, why = _map(tmp_path, fake, full=True)
     assert g == (100, 100) and not fake["run"]
+
+
+# --- the evidence the report's advice rests on ---------------------------------------------
+def test_a_plan_names_its_evidence_and_a_users_plan_takes_the_default_set(tmp_path):
+    """The paper plan keeps the quick evidence (make report's 10 minutes); a plan derived from
+    a user's scenes chooses on the default evidence, as `rockbench advise` does; a plan with
+    another value is refused naming the key."""
+    from rockbench.campaign.plan import plan_for_scenes
+    from rockbench.errors import ParameterError
+    from rockbench.sweep.cases import campaign_plan, read_plan
+
+    assert campaign_plan()["choice_evidence"] == "quick"
+    assert plan_for_scenes(["paper-asymmetric"])["choice_evidence"] == "default"
+    assert plan_for_scenes(["paper-asymmetric"], quick=True)["choice_evidence"] == "quick"
+    src = (Path(__import__("rockbench").__file__).parent / "scenarios" / "paper-plan.toml")
+    import tomllib
+
+    text = src.read_text()
+    assert read_plan(tomllib.loads(text))[0]["choice_evidence"] == "quick"
+    bad = text.replace('choice_evidence = "quick"', 'choice_evidence = "huge"')
+    with pytest.raises(ParameterError, match="choice_evidence"):
+        read_plan(tomllib.loads(bad))
+
+
+def test_the_choice_part_takes_the_plans_evidence(monkeypatch, tmp_path):
+    """run_choice builds the validation set of the plan's size (--full: the next larger)."""
+    import rockbench.campaign.choice as CC
+    import rockbench.studies.validation as V
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def validation_set(scene, size):
+        seen.append(size)
+        raise Stop
+
+    monkeypatch.setattr(V, "validation_set", validation_set)
+    for evidence, full, want in (("quick", False, "quick"), ("default", False, "default"),
+                                 ("quick", True, "default"), ("default", True, "full")):
+        with pytest.raises(Stop):
+            CC.run_choice(["pymunk"], tmp_path, full=full, evidence=evidence,
+                          scene="paper-asymmetric")
+        assert seen[-1] == want, (evidence, full)

@@ -132,8 +132,10 @@ def test_the_evidence_is_named_with_its_size():
     from rockbench.report.decision import evidence_note
 
     t = pd.DataFrame({"n_choice": [6, 6], "n_heldout": [6, 5]})
-    text = evidence_note(t, full=False)
+    text = evidence_note(t, size="quick")
     assert "quick set" in text and "6 to choose on and 6 held out" in text
     assert "default evidence" in text
-    assert "default set" in evidence_note(t, full=True)
-    assert evidence_note(pd.DataFrame(), full=False) == ""
+    text = evidence_note(t, size="default")
+    assert "default set" in text and "--full" in text
+    assert "full set" in evidence_note(t, size="full")
+    assert evidence_note(pd.DataFrame(), size="quick") == ""

@@ -29,11 +29,14 @@ CHOICE_DTS = _plan()["choice_dts"]
 def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                full: bool = False, workers: int | None = None,
                progress: bool = False, scene: Any = None, dts: Sequence[float] | None = None,
-               stress_scene: Any = None, stress_hybrid: Any = None) -> dict[str, Any]:
+               stress_scene: Any = None, stress_hybrid: Any = None,
+               evidence: str = "quick") -> dict[str, Any]:
     """{"tradeoff": table, "advice": frame, "stress": table or None, "breaks": the first
     breaking point of each engine along each axis (:func:`rockbench.studies.robustness.breaking_points`)
     or None, "words": [str]}: the
-    stability sweep runs in its fast form (``full``: the full form; ``quick``: none)."""
+    stability sweep runs in its fast form (``full``: the full form; ``quick``: none).
+    ``evidence``: the validation set the advice is chosen and confirmed on (a plan's
+    ``choice_evidence``); ``full`` takes the next larger one, ``quick`` the quick one."""
     from ..studies.advise import advice_for_report
     from ..scene.scene import load_scene
     from ..studies.robustness import AXES, axis_label, base_values, breaking_points, stress
@@ -48,7 +51,10 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     scene = CHOICE_SCENE if scene is None else scene
     dts = tuple(CHOICE_DTS if dts is None else dts)
     dts = dts[:2] if quick else dts
-    cases = validation_set(load_scene(scene), size="default" if full else "quick")
+    size = ("quick" if quick else
+            {"quick": "default", "default": "full", "full": "full"}[evidence] if full
+            else evidence)
+    cases = validation_set(load_scene(scene), size=size)
     t = tradeoff(scene, names, dts=dts, repeat=1, cases=cases,
                  self_consistency="none", workers=workers, store=store / "tradeoff",
                  progress=progress)
@@ -60,6 +66,7 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     # the stability sweep's base, by its own name (the paper's frame when the plan names none)
     stress_base = load_scene(stress_scene if stress_scene is not None else "paper-asymmetric")
     return {"tradeoff": t.table, "advice": advice, "stress": st, "stress_full": full,
+            "evidence": size,
             "breaks": breaking_points(st, stress_scene) if st is not None else None,
             "words": recommendation(advice, label), "scene": label,
             "stress_base": stress_base.name,

@@ -34,7 +34,7 @@ from typing import Any, Sequence
 
 from ..errors import ParameterError, SceneError
 
-__all__ = ["plan_for_scenes", "load_plan", "scene_refs"]
+__all__ = ["plan_for_scenes", "load_plan", "scene_refs", "structure_table"]
 
 _SHAPES = (("symmetric", 1), ("symmetric", -1), ("antisymmetric", 1), ("antisymmetric", -1))
 
@@ -148,6 +148,9 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
         "fracture_cases": tuple(frac),
         "record_frames": {n: r for n, r in zip(names[:3], refs[:3])},
         "choice_scene": first,
+        # the advice on a user's structure is chosen and confirmed on the default evidence
+        # (as `rockbench advise`; 28 cases): its report's budget is 15 minutes, not 10
+        "choice_evidence": "quick" if quick else "default",
         "stress_scene": first,
         "stress_hybrid_scene": None,
         "description": "; ".join(f"{s.name}: {s.description}" if s.description else s.name
@@ -210,3 +213,32 @@ def _plain(plan: dict[str, Any]) -> dict[str, Any]:
             return [conv(x) for x in v]
         return v
     return {k: conv(v) for k, v in plan.items() if v is not None}
+
+
+def structure_table(refs: Sequence[Any]):
+    """The structures a report is about, as its page shows them: one row per field of each
+    scene (``scene`` by its name, ``part``: block | frame | devices, ``field``, ``value``,
+    ``unit``, ``meaning`` as docs/scenes.md gives them), then the scene's alpha and p."""
+    import pandas as pd
+
+    from ..scene.scene import load_scene
+    from ..scene.schema import fields_of
+
+    rows = []
+    for ref in refs:
+        sc = load_scene(ref)
+        kind = "frame" if hasattr(sc.structure, "column_height_left") else "block"
+        given = sc.structure.to_dict()
+        parts = [(kind, f, given[f.name]) for f in fields_of(kind) if f.name in given]
+        if sc.devices is not None:
+            parts += [("devices", f, getattr(sc.devices, f.name)) for f in fields_of("devices")]
+        of = " of the taller column" if kind == "frame" else ""
+        parts += [("derived", None, ("alpha", "rad", sc.alpha, f"slenderness{of}, atan(b/H)")),
+                  ("derived", None, ("p", "rad/s", sc.p, f"frequency parameter{of}, "
+                                     "sqrt(3g/(4R))"))]
+        for part, f, v in parts:
+            name, unit, v, meaning = (v if f is None else (f.name, f.unit, v, f.meaning))
+            rows.append({"scene": sc.name, "part": part, "field": name,
+                         "value": "none" if v is None else f"{v:.6g}", "unit": unit or "-",
+                         "meaning": meaning})
+    return pd.DataFrame(rows, columns=["scene", "part", "field", "value", "unit", "meaning"])

@@ -276,7 +276,7 @@ def _hybrid(scenes) -> dict[str, bool]:
     out = {}
     for s in scenes:
         try:
-            out[s] = load_scene(s).devices is not None
+            out[s] = out[_scene_label(s)] = load_scene(s).devices is not None
         except Exception:  # not loadable here: judged by its name in the conclusion
             pass
     return out
@@ -432,7 +432,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     choice = run_choice(names, store_dir, quick=quick, full=full, workers=workers,
                         progress=progress, scene=plan["choice_scene"], dts=plan["choice_dts"],
                         stress_scene=plan.get("stress_scene"),
-                        stress_hybrid=plan.get("stress_hybrid_scene"))
+                        stress_hybrid=plan.get("stress_hybrid_scene"),
+                        evidence=plan.get("choice_evidence", "quick"))
     timings["choice"] = time.perf_counter() - t
 
     # 5: records ----------------------------------------------------------------------------
@@ -459,6 +460,10 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     t = time.perf_counter()
     metrics = T.metrics_table(payloads)
     eta, eta_summary = T.eta_tables(payloads)
+    labels = {r: _scene_label(r) for r in dict.fromkeys([*plan["scenes"], plan["map_scene"]])}
+    for df in (metrics, eta, eta_summary, omap):        # a scene by its name, not its file
+        if "scene" in df:
+            df["scene"] = df["scene"].map(lambda r: labels.get(r, r))
     engines_tab = T.engine_summary(metrics, eta_summary, speed, omap)
     files = {"metrics.csv": metrics, "eta.csv": eta, "eta_summary.csv": eta_summary,
              "engines.csv": engines_tab, "speed_accuracy.csv": speed,
@@ -483,7 +488,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         x for x in lines if not x.startswith(("Closest to the analytic model", "Fastest engine"))]
 
     # page -------------------------------------------------------------------------------
-    sections = P.page_sections(plan, names, missing, payloads, metrics, eta, eta_summary,
+    sections = P.page_sections(dict(plan, labels=labels), names, missing, payloads, metrics, eta, eta_summary,
                                engines_tab, speed, omap, records, lines, notes, out / "figures",
                                quick=quick, records_dir=records_dir, store_dir=store_dir,
                                fingerprint=fingerprint, engine_versions=_engine_versions(),
@@ -502,7 +507,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
             analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
                           f"W in {mp['analytic_frequency']}, pulse window + 10 s",
             axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
-                 f"+ {mp['engine_tail']:g} s"))
+                 f"+ {mp['engine_tail']:g} s", paper=paper))
     if frag:                                   # issue 26: report/fragility_figures.py
         from ..report.fragility_figures import fragility_html
         sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)" if paper
@@ -510,10 +515,14 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                                          fragility_html(frag, out / "figures"))
     # the decision first (report/decision.py): the advice, one row per engine, work-precision
     scene_word = choice.get("scene", "the structure")
+    from .plan import structure_table
+
     sections["decision-section"] = ("Which engine and settings", decision_html(
         choice["advice"], scene=scene_word, structure=plan.get("description", ""),
+        structures=None if paper else structure_table(plan["scenes"]),
         agreement=maps["agreement"], eta_summary=eta_summary, breaks=choice.get("breaks"),
-        notes=[n for n in [evidence_note(choice.get("tradeoff"), full=full)] if n],
+        notes=[n for n in [evidence_note(choice.get("tradeoff"),
+                                                   size=choice.get("evidence", "quick"))] if n],
         work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
     timings["report"] = time.perf_counter() - t
     total = time.perf_counter() - t_start

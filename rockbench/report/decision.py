@@ -175,16 +175,19 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
     return pd.DataFrame(rows)
 
 
-def evidence_note(tradeoff: pd.DataFrame | None, *, full: bool) -> str:
+def evidence_note(tradeoff: pd.DataFrame | None, *, size: str = "quick") -> str:
     """What the decision rests on: how many cases were chosen on and held out (columns
-    n_choice, n_heldout of the work-precision table), and what a larger set is."""
+    n_choice, n_heldout of the work-precision table) of which ``size`` of evidence ("quick",
+    "default", "full"), and what a larger set is."""
     if tradeoff is None or not len(tradeoff) or "n_choice" not in tradeoff:
         return ""
     nc, nh = int(tradeoff["n_choice"].max()), int(tradeoff["n_heldout"].max())
-    size = "default" if full else "quick"
-    more = ("" if full else " `rockbench advise SCENE` chooses on the default evidence and "
-            "`--full` on the full one: a setting confirmed here can still fail there (a "
-            "small-uplift record is the usual culprit, docs/choosing.md).")
+    more = {"quick": " `rockbench advise SCENE` chooses on the default evidence and `--full` "
+                     "on the full one: a setting confirmed here can still fail there (a "
+                     "small-uplift record is the usual culprit, docs/choosing.md).",
+            "default": " `rockbench advise SCENE --full` chooses on the full evidence and "
+                       "adds a search of the contact settings (docs/choosing.md)."
+            }.get(size, "")
     return (f"Evidence: the {size} set of the scene's own cases, {nc} to choose on and {nh} "
             f"held out to confirm (free rocking, pulses near and away from the boundary, "
             f"records).{more}")
@@ -193,13 +196,23 @@ def evidence_note(tradeoff: pd.DataFrame | None, *, full: bool) -> str:
 def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
                   agreement: pd.DataFrame | None = None,
                   eta_summary: pd.DataFrame | None = None, breaks: pd.DataFrame | None = None,
-                  work_precision_html: str = "", notes: Sequence[str] = ()) -> str:
+                  work_precision_html: str = "", notes: Sequence[str] = (),
+                  structures: pd.DataFrame | None = None) -> str:
     """The decision section: sentences, the per-engine table, the work-precision figure;
-    ``notes``: lines under the table (e.g. :func:`evidence_note`)."""
+    ``notes``: lines under the table (e.g. :func:`evidence_note`); ``structures``: the fields
+    of the scenes the report is about (``rockbench.campaign.plan.structure_table``), shown
+    collapsed under the "About" line."""
     lead = decision_sentences(advice, scene)
     parts = ['<div id="decision">']
     if structure:
         parts.append(f'<p class="lead">About: {escape(structure)}</p>')
+    if structures is not None and len(structures):
+        from .html import html_table
+
+        parts.append("<details><summary>The structures, field by field (SI units; "
+                     "docs/scenes.md)</summary>" + html_table(
+                         structures, list(structures.columns), graded=False, scroll=True)
+                     + "</details>")
     parts.append("<ul>" + "".join(f"<li>{escape(s)}</li>" for s in lead) + "</ul>")
     tab = decision_table(advice, agreement=agreement, eta_summary=eta_summary, breaks=breaks,
                          scene=scene)

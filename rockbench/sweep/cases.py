@@ -361,6 +361,14 @@ class Catalogue:
                 for s, Ws in self.overturn_w.items() for W in Ws for shape, sign in self.pulses]
 
 
+def _evidence(size: Any) -> str:
+    """A plan's ``choice_evidence``: the validation set the report's advice is chosen and
+    confirmed on (:func:`rockbench.studies.validation.validation_set` sizes)."""
+    if size not in ("quick", "default", "full"):
+        raise ParameterError("choice_evidence", size, "'quick', 'default' or 'full'")
+    return str(size)
+
+
 def _pairs(rows, kinds=(float, float)) -> tuple[tuple, ...]:
     return tuple(tuple(k(v) for k, v in zip(kinds, r, strict=True)) for r in rows)
 
@@ -380,6 +388,7 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
             "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float)),
             "choice_scene": str(c.get("choice_scene", c["map_scene"])),
             "choice_dts": tuple(map(float, c.get("choice_dts", (2e-3, 1e-3, 5e-4)))),
+            "choice_evidence": _evidence(c.get("choice_evidence", "quick")),
             "stress_scene": c.get("stress_scene"),
             "stress_hybrid_scene": c.get("stress_hybrid_scene"),
             "maps": _maps_plan(c.get("maps", {}), c),
