@@ -187,6 +187,8 @@ def _tabulate(row: np.ndarray, dyn, s: int, fall: float) -> None:
     from numpy.polynomial import chebyshev as C
 
     from ..scene.mechanism import geometric_limit
+    if TABLE_DEGREE != 11:      # the kernel evaluates degree 11 by Estrin's scheme
+        raise ValueError(f"TABLE_DEGREE must be 11 (kernels._estrin11), not {TABLE_DEGREE}")
     lo = -TABLE_MARGIN
     hi = TABLE_END * min(fall, geometric_limit(dyn.mechanism))
     n, d = TABLE_INTERVALS, TABLE_DEGREE

@@ -315,6 +315,7 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
                     t_new = t_end
                 h = t_new - t
                 h_abs = abs(h)
+                err = 0.0
                 if form == 2:
                     err, n0, n1, fn1 = _attempt(2, t, h, ya0, ya1, f0, f1, K, A, B, C, E3, E5,
                                                 rtol, atol, mk, g, intact, dev, kin, mp, rt,
@@ -323,11 +324,9 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
                     err, n0, n1, fn1 = _attempt(3, t, h, ya0, ya1, f0, f1, K, A, B, C, E3, E5,
                                                 rtol, atol, mk, g, intact, dev, kin, mp, rt,
                                                 ra, hint)
-                    if not (err == err):    # a stage beyond the table: the exact closure
-                        err, n0, n1, fn1 = _attempt(0, t, h, ya0, ya1, f0, f1, K, A, B, C, E3,
-                                                    E5, rtol, atol, mk, g, intact, dev, kin, mp,
-                                                    rt, ra, hint)
-                else:
+                # the general form; with form 3, when a stage lay beyond the table (NaN): the
+                # exact closure
+                if form == 0 or not (err == err):
                     err, n0, n1, fn1 = _attempt(0, t, h, ya0, ya1, f0, f1, K, A, B, C, E3, E5,
                                                 rtol, atol, mk, g, intact, dev, kin, mp, rt,
                                                 ra, hint)
@@ -386,13 +385,14 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
                 yold[0] = ya0
                 yold[1] = ya1
                 # dense output (DOP853._dense_output_impl): three extra stages
+                ok_x = False
                 if form == 2:
-                    _extra_stages(2, t_old, h, ya0, ya1, K, A, C, ns, mk, g, intact, dev, kin,
-                                  mp, rt, ra, hint)
-                elif form == 3 and _extra_stages(3, t_old, h, ya0, ya1, K, A, C, ns, mk, g,
-                                                 intact, dev, kin, mp, rt, ra, hint):
-                    pass
-                else:
+                    ok_x = _extra_stages(2, t_old, h, ya0, ya1, K, A, C, ns, mk, g, intact, dev,
+                                         kin, mp, rt, ra, hint)
+                elif form == 3:
+                    ok_x = _extra_stages(3, t_old, h, ya0, ya1, K, A, C, ns, mk, g, intact, dev,
+                                         kin, mp, rt, ra, hint)
+                if not ok_x:
                     _extra_stages(0, t_old, h, ya0, ya1, K, A, C, ns, mk, g, intact, dev, kin,
                                   mp, rt, ra, hint)
                 nfev += ntab - ns - 1
