@@ -221,3 +221,63 @@ def test_cli_fragility_names_the_scene_and_the_notes_unit(cabinet, tmp_path, cap
     assert "cabinet.toml" not in out
     notes = [line for line in out.splitlines() if "median" in line and "(" in line]
     assert notes and all("intensities in m/s^2" in line for line in notes)
+
+
+# --- the report: a scene by its name, its fields on the page -------------------------------
+def test_a_scene_file_is_labelled_by_the_scenes_name(gateway, tmp_path):
+    """The report labelled a user's structure by its file's stem ('gateway') or its path, in
+    case names, map captions, tables and findings; its own name is 'stone-gateway'."""
+    from rockbench.campaign.maps import scene_label
+
+    assert scene_label(gateway) == "stone-gateway"
+    nameless = tmp_path / "plinth.toml"
+    nameless.write_text(CABINET.replace('name = "museum-cabinet"\n', ""))
+    assert scene_label(str(nameless)) == "plinth"             # no name: the file's stem
+    assert scene_label("paper-asymmetric") == "paper-asymmetric"
+
+
+def test_the_structure_table_gives_every_field_with_its_unit(gateway, cabinet):
+    from rockbench.campaign.plan import structure_table
+
+    t = structure_table([gateway, cabinet])
+    gw = t[t["scene"] == "stone-gateway"].set_index("field")
+    assert gw.loc["column_height_right", "value"] == "4.9"
+    assert gw.loc["column_height_right", "unit"] == "m"
+    assert gw.loc["beam_mass", "unit"] == "kg" and gw.loc["damping", "unit"] == "N s/m"
+    assert float(gw.loc["alpha", "value"]) == pytest.approx(math.atan(0.55 / 5.2), rel=1e-5)
+    cab = t[t["scene"] == "museum-cabinet"].set_index("field")
+    assert set(cab["part"]) == {"block", "derived"}
+    assert "column" not in " ".join(cab["meaning"])          # a block has no columns
+
+
+def test_a_users_maps_section_does_not_claim_the_papers_figures():
+    from rockbench.report.maps_page import maps_html
+
+    rows = [{"pulse": "symmetric", "sign": 1, "amplitude": a, "frequency": 1.0,
+             "overturned": a > 1, "status": "ok", "max_abs_phi_over_alpha": 0.5}
+            for a in (1.0, 2.0)]
+    maps = {"analytic": {"stone-gateway": pd.DataFrame(rows)}, "agreement": None}
+    html = maps_html(maps, None, analytic_grid="2 x 1", axes="", paper=False)
+    assert "stone-gateway" in html and "paper" not in html.lower()
+    assert "Figs. 4-7" in maps_html(maps, None, analytic_grid="2 x 1", axes="")
+
+
+@pytest.mark.slow
+def test_the_quick_report_on_the_gateway_is_about_it(gateway, tmp_path):
+    """rockbench report SCENE --quick (pymunk only): every label is the scene's name, its
+    fields are on the page, and nothing claims the paper's frame or figures."""
+    pytest.importorskip("pymunk")
+    out = tmp_path / "rep"
+    assert main(["report", gateway, "--quick", "--engine", "pymunk", "--out", str(out),
+                 "-q"]) == 0
+    page = (out / "index.html").read_text(encoding="utf-8")
+    body = page.split('id="settings-section"')[0]            # settings list the file itself
+    assert "stone-gateway" in body and "column_height_right" in body
+    import re
+
+    assert gateway not in body
+    labels = body.replace("pier-and-lintel gateway", "")      # its description says it
+    assert not re.findall(r"(?<!stone-)gateway\b(?!\.toml)", labels)  # never the file's stem
+    assert "Figs. 4-7" not in body and "the paper&#x27;s frame" not in body
+    eta = pd.read_csv(out / "eta.csv")
+    assert set(eta["scene"]) == {"stone-gateway"}

@@ -18,6 +18,7 @@ says why. Every map is kept in a resumable store.
 
 from __future__ import annotations
 
+import functools
 import shutil
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -71,10 +72,21 @@ def is_fast(engine: str) -> bool:
 
 def scene_label(ref: Any) -> str:
     """A scene's label in file names and on the page: a built-in name as it is, a TOML path by
-    its file's stem, a Scene by its name."""
+    the scene's own ``name`` (its file's stem when the file gives none), a Scene by its name."""
     if isinstance(ref, (str, Path)) and (str(ref).endswith(".toml") or "/" in str(ref)):
-        return Path(ref).stem
+        return _file_label(str(ref))
     return str(getattr(ref, "name", ref))
+
+
+@functools.lru_cache(maxsize=256)
+def _file_label(path: str) -> str:
+    import tomllib
+
+    try:
+        name = tomllib.loads(Path(path).read_text(encoding="utf-8")).get("name")
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        name = None                # the scene loader says what is wrong with the file
+    return str(name) if isinstance(name, str) and name.strip() else Path(path).stem
 
 
 def _axes(maps: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:

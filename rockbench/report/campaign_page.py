@@ -109,8 +109,9 @@ def fracture_html(frac, units) -> str:
             + H.html_table(frac, cols, units=units, table_id="fracture", scroll=True))
 
 
-def _label(ref) -> str:
-    """A scene's label on the page: a built-in name, or a scene file's stem."""
+def _file_label(ref) -> str:
+    """A scene's label on the page when the plan's ``labels`` do not give its name: a built-in
+    name, or a scene file's stem."""
     text = str(ref)
     return text.replace("\\", "/").rsplit("/", 1)[-1].removesuffix(".toml")
 
@@ -134,6 +135,11 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     ``engine_versions``: backend name -> version (or why it is unavailable); ``files``: the
     CSV files written."""
     units = {**METRIC_COLUMNS, **DERIVED_COLUMNS}
+    names_of = plan.get("labels") or {}         # scene reference -> the scene's own name
+
+    def _label(ref) -> str:
+        return names_of.get(ref) or _file_label(ref)
+
     for tab in CAMPAIGN_COLUMNS.values():
         for k, v in tab.items():
             units.setdefault(k, v)

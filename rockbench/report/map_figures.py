@@ -66,8 +66,9 @@ def plot_map_panels(df: pd.DataFrame, *, title: str) -> Figure:
         over = np.where(ot.to_numpy() == 1, 1.0, np.nan)
         ax.pcolormesh(_edges(W), _edges(A), over, cmap=ListedColormap(["#c0392b"]),
                       shading="flat")
-        ax.set_xlim(W.min(), W.max())
-        ax.set_ylim(A.min(), A.max())
+        ex, ey = _edges(W), _edges(A)      # one value on an axis: its cell's own width
+        ax.set_xlim(*((W.min(), W.max()) if len(W) > 1 else (ex[0], ex[-1])))
+        ax.set_ylim(*((A.min(), A.max()) if len(A) > 1 else (ey[0], ey[-1])))
     for ax in axes[1]:
         ax.set_xlabel("W = omega_g / p [-]")
     for ax in axes[:, 0]:

@@ -30,14 +30,17 @@ AGREEMENT_COLUMNS: dict[str, str] = {
 }
 
 
-def maps_html(maps: Mapping[str, Any], figdir, *, analytic_grid: str, axes: str) -> str:
-    """HTML of the map section from :func:`rockbench.campaign.maps.run_maps`'s output."""
+def maps_html(maps: Mapping[str, Any], figdir, *, analytic_grid: str, axes: str,
+              paper: bool = True) -> str:
+    """HTML of the map section from :func:`rockbench.campaign.maps.run_maps`'s output;
+    ``paper``: the paper's plan (its maps are the paper's Figs. 4-7; a user's are not)."""
     parts = []
     for scene, df in maps["analytic"].items():
         parts.append(H.figure_html(
             plot_map_panels(df, title=f"{scene}: analytic overturning map"),
-            f"{scene}, analytic model (compiled path), {analytic_grid}: the four panels of "
-            f"the paper's Figs. 4-7 (symmetric and antisymmetric pulses, both signs) on "
+            f"{scene}, analytic model (compiled path), {analytic_grid}: the four panels "
+            + ("of the paper's Figs. 4-7 " if paper else "") +
+            "(symmetric and antisymmetric pulses, both signs) on "
             f"W = omega_g / p [-] and A = a_g / (g tan alpha) [-].",
             name=f"map_{scene}_analytic", png_dir=figdir))
     ag = maps.get("agreement")
