@@ -281,3 +281,17 @@ def test_the_quick_report_on_the_gateway_is_about_it(gateway, tmp_path):
     assert "Figs. 4-7" not in body and "the paper&#x27;s frame" not in body
     eta = pd.read_csv(out / "eta.csv")
     assert set(eta["scene"]) == {"stone-gateway"}
+
+
+def test_findings_call_a_block_a_structure_not_a_frame(gateway, cabinet):
+    """With the cabinet (a block) in the report, the findings grouped it under "free-standing
+    frames"."""
+    from rockbench.campaign.run import _all_frames
+    from rockbench.report.conclusions import _groups
+
+    assert _all_frames([gateway]) and not _all_frames([gateway, cabinet])
+    df = pd.DataFrame({"scene": ["stone-gateway", "museum-cabinet"], "x": [1.0, 2.0]})
+    labels = [k for k, _ in _groups(df, {"stone-gateway": True, "museum-cabinet": False},
+                                    "structures")]
+    assert labels == ["free-standing structures", "hybrid structures"]
+    assert [k for k, _ in _groups(df, {"stone-gateway": True})][1] == "hybrid frames"

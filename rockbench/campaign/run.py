@@ -269,6 +269,13 @@ def _scene_label(ref: Any) -> str:
     return scene_label(ref)
 
 
+def _all_frames(scenes) -> bool:
+    """Whether every scene is a frame (the findings then say "frames", else "structures")."""
+    from ..scene import load_scene
+
+    return all(hasattr(load_scene(s).structure, "column_height_left") for s in scenes)
+
+
 def _hybrid(scenes) -> dict[str, bool]:
     """Scene name -> whether it has devices (tendons, dampers)."""
     from ..scene import load_scene
@@ -481,7 +488,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         df.to_csv(out / name, index=False)
     lines = campaign_conclusion(engines_tab, metrics, eta_summary, speed, omap, records,
                                 hybrid=_hybrid(plan["scenes"]),
-                                map_scene=_scene_label(plan["map_scene"]))
+                                map_scene=_scene_label(plan["map_scene"]),
+                                noun="frames" if _all_frames(plan["scenes"]) else "structures")
     # the recommendation first (measured advice, CPU time), then the evidence; the median-
     # based "closest" and the load-dependent "fastest" headlines give way to it
     lines = choice["words"] + maps["words"] + [

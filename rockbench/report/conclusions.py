@@ -18,27 +18,30 @@ def _pct(x: float) -> str:
     return "n/a" if x is None or pd.isna(x) else f"{100.0 * x:.2f} %"
 
 
-def _groups(df: pd.DataFrame, hybrid: Mapping[str, bool]) -> list[tuple[str, pd.DataFrame]]:
+def _groups(df: pd.DataFrame, hybrid: Mapping[str, bool],
+            noun: str = "frames") -> list[tuple[str, pd.DataFrame]]:
     """(label, rows) for the free-standing and the hybrid scenes of ``df`` (column scene);
-    ``hybrid`` says which scenes have devices (a scene missing from it: judged by its name)."""
+    ``hybrid`` says which scenes have devices (a scene missing from it: judged by its name);
+    ``noun``: what they are ("frames"; "structures" when a block is among them)."""
     if not len(df):
         return []
     hyb = df["scene"].map({s: bool(hybrid.get(s, "hybrid" in str(s)))
                            for s in df["scene"].unique()}).astype(bool)
-    out = [("free-standing frames", df[~hyb]), ("hybrid frames", df[hyb])]
+    out = [(f"free-standing {noun}", df[~hyb]), (f"hybrid {noun}", df[hyb])]
     return [(k, v) for k, v in out if len(v)]
 
 
 def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summary: pd.DataFrame,
                         speed: pd.DataFrame, omap: pd.DataFrame, records: pd.DataFrame, *,
                         hybrid: Mapping[str, bool] | None = None,
-                        map_scene: str = "paper-asymmetric") -> list[str]:
+                        map_scene: str = "paper-asymmetric", noun: str = "frames") -> list[str]:
     """Plain-language findings computed from the campaign's tables (numbers: nrmse and
     real-time factors ``.3g``, relative errors in percent with 2 decimals).
 
     ``hybrid``: scene name -> whether it has devices (tendons, dampers), to group the
     findings into free-standing and hybrid frames (default: judged by the name);
-    ``map_scene``: the scene of the overturning map, named in the sentences."""
+    ``map_scene``: the scene of the overturning map, named in the sentences; ``noun``: what
+    the scenes are ("frames"; "structures" when a block is among them)."""
     hybrid = dict(hybrid or {})
     lines: list[str] = []
     eng = engines[engines["backend"] != "analytic"] if len(engines) else engines
@@ -67,7 +70,7 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
                 f"{_pct(r['peak_rel_error_median'])} (largest "
                 f"{_pct(r['peak_rel_error_max'])}).")
         ok = pulses[pulses["status"] == "ok"]
-        for label, g in _groups(ok, hybrid):
+        for label, g in _groups(ok, hybrid, noun):
             parts = []
             for name in order:
                 s = g[g["backend"] == name]
@@ -94,7 +97,7 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
         for b, g in es.groupby("backend", sort=False):
             worst = g.loc[g["rel_error"].abs().idxmax()]
             per = "; ".join(f"{label} {_pct(x['rel_error'].abs().mean())}"
-                            for label, x in _groups(g, hybrid))
+                            for label, x in _groups(g, hybrid, noun))
             lines.append(
                 f"Free rocking: the effective eta of {b} is off the analytic eta by "
                 f"{_pct(g['rel_error'].abs().mean())} on average over scenes and directions "
@@ -146,7 +149,7 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
             order_flags = order
         for b in order_flags:
             parts = []
-            for label, g in _groups(flags[flags["backend"] == b], hybrid):
+            for label, g in _groups(flags[flags["backend"] == b], hybrid, noun):
                 n = int(g["energy_gained_at_impact"].fillna(False).astype(bool).sum())
                 parts.append(f"{n} of {len(g)} on {label}")
             if parts:
