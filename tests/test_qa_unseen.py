@@ -295,3 +295,11 @@ def test_findings_call_a_block_a_structure_not_a_frame(gateway, cabinet):
                                     "structures")]
     assert labels == ["free-standing structures", "hybrid structures"]
     assert [k for k, _ in _groups(df, {"stone-gateway": True})][1] == "hybrid frames"
+
+
+def test_compare_prints_no_bare_nan(cabinet, capsys):
+    """The analytic row's contact columns printed 'NaN' (a silent NaN to a reader)."""
+    assert main(["compare", cabinet, "--phi0-alpha", "0.3", "--engine", "pymunk",
+                 "--duration", "1", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "NaN" not in out and "n/a" in out and "n/a: not measured" in out

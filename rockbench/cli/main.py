@@ -392,9 +392,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
     print(f"{scene.name}: {_describemotion_from(motion, phi0, scene.alpha)}")
     cols = [c for c in COMPARE_COLUMNS if c in table.columns]
     with pandas_display():
-        print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+        print(table[cols].to_string(index=False, na_rep="n/a",
+                                    float_format=lambda v: f"{v:.4g}"))
     print("units: max_abs_phi_over_alpha, peak_rel_error, nrmse, eta_max_rel_error: -; "
-          "max_penetration, max_sliding: m; wall_s: s; real_time_factor: simulated s per wall s")
+          "max_penetration, max_sliding: m; wall_s: s; real_time_factor: simulated s per wall s"
+          "; n/a: not measured (e.g. the analytic model has no contact to penetrate or slide)")
     if csv_path:
         print(f"table: {csv_path}")
     if report_path:
