@@ -66,7 +66,7 @@ from typing import Iterable
 import numpy as np
 import pandas as pd
 
-from ..constants import G
+from ..constants import FREE_TAIL, G
 from ..errors import BackendUnavailable, ParameterError, check_positive
 from ..result import (Cost, Result, Summary, events_frame,
                       output_grid)
@@ -304,7 +304,7 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
     t0 = float(motion.t_start) if motion is not None else 0.0
     m_end = float(motion.t_end) if motion is not None else 0.0
     if duration is None:
-        duration = max(m_end - t0, 0.0) + 10.0
+        duration = max(m_end - t0, 0.0) + FREE_TAIL
     duration = check_positive("duration", duration)
     phi0, phidot0 = float(phi0), float(phidot0)
     for name, v in (("phi0", phi0), ("phidot0", phidot0)):

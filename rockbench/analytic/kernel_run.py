@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from ..constants import FREE_TAIL
 from .kernels import numba, njit, prange  # noqa: F401
 from .kernels import (_NOUT, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _acc, _brent_core, _dense_eval, _fill_hist, _max_abs_after, _next_uplift, _phidd, _push_event, _rms2, _tabulated)
 
@@ -601,7 +602,7 @@ def _grid_cell(i, geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, 
     _pulse_setup(shape, float(signs[i]), As[i], Ws[i], sc[12], sc[13], sym_ext, anti_ext, beta,
                  xfac, mp, ext, extsuf)
     t0 = mp[2]
-    dur = duration if duration > 0.0 else (mp[3] - mp[2]) + 10.0
+    dur = duration if duration > 0.0 else (mp[3] - mp[2]) + FREE_TAIL
     dummy = np.zeros(1)
     evf = np.zeros((1, 5))
     evi = np.zeros((1, 2), dtype=np.int64)

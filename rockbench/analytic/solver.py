@@ -43,7 +43,7 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from ..constants import G
+from ..constants import FREE_TAIL, G
 from ..errors import ParameterError, check_positive, check_range
 from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
                       output_grid)
@@ -165,7 +165,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     mot = motion if motion is not None else _Zero()
     t0 = float(mot.t_start)
     if duration is None:
-        duration = max(mot.t_end - t0, 0.0) + 10.0
+        duration = max(mot.t_end - t0, 0.0) + FREE_TAIL
     duration = check_positive("duration", duration)
     phi0 = float(phi0)
     phidot0 = float(phidot0)
