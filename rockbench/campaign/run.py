@@ -468,7 +468,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     metrics = T.metrics_table(payloads)
     eta, eta_summary = T.eta_tables(payloads)
     labels = {r: _scene_label(r) for r in dict.fromkeys([*plan["scenes"], plan["map_scene"]])}
-    for df in (metrics, eta, eta_summary, omap):        # a scene by its name, not its file
+    for df in (metrics, eta, eta_summary, omap, records):   # a scene by its name, not its file
         if "scene" in df:
             df["scene"] = df["scene"].map(lambda r: labels.get(r, r))
     engines_tab = T.engine_summary(metrics, eta_summary, speed, omap)
