@@ -303,3 +303,13 @@ def test_compare_prints_no_bare_nan(cabinet, capsys):
                  "--duration", "1", "-q"]) == 0
     out = capsys.readouterr().out
     assert "NaN" not in out and "n/a" in out and "n/a: not measured" in out
+
+
+def test_compare_says_why_a_run_is_not_ok(cabinet, capsys):
+    """A 7 g pulse makes the squat cabinet slide 0.8 m in pymunk: the table said 'diverged'
+    and nothing else."""
+    pytest.importorskip("pymunk")
+    assert main(["compare", cabinet, "--pulse", "symmetric", "--amplitude", "11.45",
+                 "--frequency", "4", "--engine", "pymunk", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "pymunk: diverged: sliding" in out and "max_sliding" in out

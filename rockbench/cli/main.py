@@ -397,6 +397,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     print("units: max_abs_phi_over_alpha, peak_rel_error, nrmse, eta_max_rel_error: -; "
           "max_penetration, max_sliding: m; wall_s: s; real_time_factor: simulated s per wall s"
           "; n/a: not measured (e.g. the analytic model has no contact to penetrate or slide)")
+    for name, res in comparison.results.items():       # a run not ok says why, not only that
+        if res.summary.status != "ok":
+            print(f"{name}: {res.summary.status}: {res.summary.reason or 'no reason given'}")
     if csv_path:
         print(f"table: {csv_path}")
     if report_path:
