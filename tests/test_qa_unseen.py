@@ -313,3 +313,16 @@ def test_compare_says_why_a_run_is_not_ok(cabinet, capsys):
                  "--frequency", "4", "--engine", "pymunk", "-q"]) == 0
     out = capsys.readouterr().out
     assert "pymunk: diverged: sliding" in out and "max_sliding" in out
+
+
+def test_info_speaks_of_a_block_as_a_block_and_explains_none(cabinet, gateway, capsys):
+    """The cabinet's alpha was 'slenderness of the taller column'; a 'none' critical angle or
+    fracture rotation was left unexplained."""
+    assert main(["info", cabinet]) == 0
+    assert "column" not in capsys.readouterr().out
+    assert main(["info", gateway, "--set", "devices.fracture_strain=none"]) == 0
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if x.startswith("phi_fracture_ccw"))
+    assert "none: the tendons never fracture" in line
+    line = next(x for x in out.splitlines() if x.startswith("phi_cr_ccw "))
+    assert "none: no zero of dV/dphi" in line

@@ -221,8 +221,14 @@ def cmd_info(args: argparse.Namespace) -> int:
         if key in ("scene", "type"):
             continue
         unit, meaning = CONSTANTS.get(key, ("", ""))
+        if not hasattr(scene.structure, "column_height_left"):   # a block has no columns
+            meaning = meaning.replace(" of the taller column", "")
         if unit == "rad" and key != "alpha" and isinstance(value, float):
             meaning += f" (= {value / alpha:.4g} alpha)"
+        if value is None and key.startswith("phi_cr"):
+            meaning += " (none: no zero of dV/dphi before the fall angle)"
+        elif value is None and key.startswith("phi_fracture"):
+            meaning += " (none: the tendons never fracture)"
         rows.append([key, _fmt(value), unit, meaning])
     print(_table(rows, ["quantity", "value", "unit", "meaning"]))
     return 0
