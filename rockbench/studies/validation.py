@@ -18,6 +18,13 @@ the analytic model, and split into a **choice** part and a **held-out** part.
   phases of small uplift, where soft contacts swallow small rockings (a record whose analytic
   peak stays below :data:`MIN_PEAK` alpha is left out).
 
+Every case lies within the analytic model: its pivots never slide. A case whose peak ground
+acceleration exceeds :data:`NO_SLIDING_PGA` (mu g with mu = 1, the engines' default friction:
+beyond it a base slides under the ground's own acceleration, whatever it rocks) is left out like
+a case below MIN_PEAK, and the next in order taken: a squat structure that needs more than 1 g
+to overturn has no overturning cases in its evidence, and an engine whose base slides there is
+not judged against a model that cannot slide.
+
 On a mirror-symmetric structure (equal thresholds, restitution and fall angles both ways) a
 case and its sign-flipped twin are the same physics: only the positive sign is kept.
 
@@ -40,12 +47,14 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
+from ..constants import G
 from ..errors import ParameterError
 from .maps import NEAR_BOUNDARY_MARGIN
 
 __all__ = ["ValidationCase", "validation_set", "candidate_cases", "overturn_threshold",
            "mirror_symmetric",
-           "uplift_threshold", "SIZES", "GROUP_SIZES", "NEAR_MARGIN", "W_GRID", "SEED"]
+           "uplift_threshold", "SIZES", "GROUP_SIZES", "NEAR_MARGIN", "W_GRID", "SEED",
+           "NO_SLIDING_PGA"]
 
 # The design (the analytic model chooses the cells; see the module docstring)
 W_GRID = (1.5, 2.0, 3.0, 4.0, 6.0, 8.0)
@@ -61,6 +70,10 @@ OVER_LEVEL = 1.3                     # x A_ov
 #: about 1e-3 alpha as no uplift at all, and a relative peak error of a response of a few
 #: thousandths of alpha measures the contact's compliance, not the rocking.
 MIN_PEAK = 0.05
+#: Largest peak ground acceleration [m/s^2] of a case: mu g with mu = 1 (the engines' default
+#: Coulomb friction, ``rockbench.engines.base.Settings.friction``). The analytic model assumes
+#: pivots that never slide; a stronger motion slides a base whatever it rocks.
+NO_SLIDING_PGA = 1.0 * G
 _FREE_PHI0 = (0.1, 0.3, 0.7)         # x alpha, both directions
 RECORD_FACTORS = (1.3, 2.0, 3.0)     # x the uplift PGA g min|lambda|
 _RECORD_DURATION = 15.0              # s from the record's start
@@ -284,7 +297,7 @@ def _candidates(key: str) -> tuple[tuple[str, dict[str, Any]], ...]:
             out.append(("overturn", {"kind": "pulse", "A": round(OVER_LEVEL * A_ov, 4), **base}))
     from ..scene.records import bundled_records
 
-    pga_up = 9.81 * A_up * math.tan(scene.alpha)
+    pga_up = G * A_up * math.tan(scene.alpha)
     for rec in bundled_records():
         for f in RECORD_FACTORS:
             for s in signs:
@@ -319,6 +332,8 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
         ratio = A / desc["A_ov"]
         near = abs(ratio - 1.0) <= NEAR_MARGIN
         p = _pulse(sc, A, W, shape, sign)
+        if p.peak > NO_SLIDING_PGA:              # outside the model: its pivots would slide
+            return None
         dur = _pulse_duration(p, _OVER_TAIL if (near or ratio > 1) else _AWAY_TAIL)
         r = _analytic(sc, p, dur, compiled=True)
         if not r.summary.uplifted or r.summary.max_abs_phi_over_alpha < MIN_PEAK:
@@ -330,6 +345,8 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
                               a_ratio=round(ratio, 4))
     from ..scene.motion import motion_from_spec
 
+    if desc["pga_target"] > NO_SLIDING_PGA:      # outside the model: its pivots would slide
+        return None
     spec = {"kind": "record", "path": desc["path"], "scale": 1.0}
     rec = motion_from_spec(spec, scene.structure)
     scale = round(desc["s"] * desc["pga_target"] / rec.peak, 4)
