@@ -115,3 +115,35 @@ def test_the_choice_part_takes_the_plans_evidence(monkeypatch, tmp_path):
             CC.run_choice(["pymunk"], tmp_path, full=full, evidence=evidence,
                           scene="paper-asymmetric")
         assert seen[-1] == want, (evidence, full)
+
+
+# --- the default map store after an upgrade -------------------------------------------------
+def test_default_map_store_of_other_code_is_set_aside_not_refused(tmp_path, monkeypatch,
+                                                                   capsys):
+    """`rockbench map SCENE` with no --store, after the physics code changed: the old store is
+    kept under another name and the map computed afresh (one line on stderr); a store the user
+    names is still refused."""
+    import json
+
+    from rockbench.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    args = ["map", "housner-block", "--grid", "2x2", "--pulses", "symmetric+", "--json"]
+    assert main(args) == 0
+    store = tmp_path / "maps" / "housner-block_analytic.parquet"
+    meta = json.loads((store / "_inputs.json").read_text())
+    meta["code"] = "000000000000"                        # as if written by other code
+    (store / "_inputs.json").write_text(json.dumps(meta))
+    capsys.readouterr()
+    assert main(args) == 0
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
+    assert out["cells_run"] == 4 and out["reused"] == 0
+    assert (tmp_path / "maps" / "housner-block_analytic.parquet.code-000000000000").is_dir()
+    assert "computing the map afresh" in cap.err
+    named = tmp_path / "mine.parquet"
+    assert main([*args, "--store", str(named)]) == 0
+    meta = json.loads((named / "_inputs.json").read_text())
+    meta["code"] = "000000000000"
+    (named / "_inputs.json").write_text(json.dumps(meta))
+    assert main([*args, "--store", str(named)]) == 2           # a named store: refused

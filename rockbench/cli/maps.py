@@ -147,6 +147,31 @@ def _same_structure(first: str, second: str) -> None:
                              "_inputs.json differ): --compare takes two maps of one scene")
 
 
+def _set_aside_other_code(store: Path, *, quiet: bool) -> None:
+    """The default store (``maps/SCENE_ENGINE.parquet``, not one the user named) written by
+    other rockbench physics code (its ``code`` fingerprint differs) is renamed to
+    ``NAME.parquet.code-OLD`` and the map computed afresh, with one line on stderr: an upgrade
+    neither fails nor deletes anything. A store the user named is refused as before."""
+    from ..sweep.map_store import read_inputs
+    from ..sweep.store import code_fingerprint
+
+    if not (store / "_inputs.json").is_file():
+        return
+    old = read_inputs(store)
+    if isinstance(old, str) or "code" not in old or old["code"] == code_fingerprint():
+        return
+    aside = store.with_name(f"{store.name}.code-{old['code']}")
+    if aside.exists():
+        return                                   # leave it to the refusal, which names both
+    try:
+        store.rename(aside)
+    except OSError:
+        return
+    if not quiet:
+        print(f"rockbench: {store} was computed by other rockbench code (code {old['code']}); "
+              f"kept as {aside}, computing the map afresh", file=sys.stderr)
+
+
 def cmd_map(args: argparse.Namespace) -> int:
     with _one_line_warnings():
         return _cmd_map(args)
@@ -205,6 +230,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
             texts.append(text)
     settings = backend_overrides(args.engine, argparse.Namespace(settings=texts, dt=None))
     store = args.store or str(Path("maps") / f"{Path(args.scene).stem}_{args.engine}.parquet")
+    if not args.store:
+        _set_aside_other_code(Path(store), quiet=args.quiet)
     df = run_map(args.scene, args.engine, grid=args.grid, amplitude=args.amplitude,
                  frequency=args.frequency, pulses=args.pulses, overrides=scene_overrides,
                  settings=settings, method=method, store=store, workers=args.workers,
