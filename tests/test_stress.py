@@ -129,3 +129,26 @@ def test_a_users_scene_is_its_own_base():
     assert dict(t.overrides)["tendon_stiffness"] == pytest.approx(
         1000 * hybrid.devices.tendon_stiffness)
     assert S.base_values(block)["alpha"] == pytest.approx(np.arctan(0.6 / 2.4), abs=1e-4)
+
+
+def test_a_wrong_verdict_is_said_in_words(monkeypatch):
+    """An engine whose verdict differs from the analytic one is "off" with error inf, and its
+    flags say which way (a breaking point read "error inf" before)."""
+    import rockbench.compare as C
+
+    real = C.metrics
+
+    def flipped(*args, **kwargs):
+        m = real(*args, **kwargs)
+        m.update(overturned=True, verdict_agrees=False)   # as if the engine had overturned
+        return m
+
+    monkeypatch.setattr(C, "metrics", flipped)
+    pulse = (("A", 2.5), ("W", 3.0), ("kind", "ricker"), ("shape", "symmetric"), ("sign", 1))
+    pt = FREE_BLOCK.__class__("dt", 1e-3, "housner-block", (), pulse, 0.0)
+    row = S.run_point(("pymunk", pt))
+    assert row["class"] == "off" and row["error"] == math.inf
+    assert "overturns where the analytic model survives" in row["flags"]
+    bp = S.breaking_points(pd.DataFrame([row]).assign(axis="dt", value=4e-3),
+                           "housner-block")
+    assert "overturns where the analytic model survives" in bp["reason"].iloc[0]

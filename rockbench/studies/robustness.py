@@ -277,7 +277,8 @@ STRESS_COLUMNS: dict[str, str] = {
     "class": "-, within 1% | within 5% | off | diverged | invalid | outside model",
     "engine_class": "-, the class from this engine's run alone (before the validity check)",
     "error": "-, relative error against the analytic reference (see the module docstring)",
-    "flags": "-, checks an ok run fails: sliding, energy gained, eta not measured",
+    "flags": "-, checks an ok run fails: sliding, energy gained, eta not measured, a verdict "
+             "that differs from the analytic one",
     "model_validity": "-, inside | outside (why) the analytic model's validity at this point",
     "peak_rel_error": "-, max|phi| / max|phi_ref| - 1",
     "eta_ratio_max": "-, largest measured eta / analytic eta over the run's impacts",
@@ -353,6 +354,9 @@ def run_point(item: tuple[str, StressPoint]) -> dict[str, Any]:
     if motion is None and bool(m.get("energy_gained_at_impact")):
         flags.append("energy gained at an impact")
     period = float(getattr(motion, "period", 1.0)) if motion is not None else 1.0
+    if not bool(m["verdict_agrees"]):                # the error is the verdict, said in words
+        flags.append("overturns where the analytic model survives" if bool(m["overturned"])
+                     else "survives where the analytic model overturns")
     if bool(m["overturned_ref"]):
         if not bool(m["verdict_agrees"]):
             err = math.inf
