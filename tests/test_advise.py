@@ -308,3 +308,18 @@ def test_the_advice_follows_the_backends_own_precision_knob():
     if knob == "dt":
         pytest.skip("drake not installed")
     assert precision_knob("drake") == (knob, tuple(float(v) for v in values))
+
+
+def test_held_out_counts_say_which_cases_were_not_counted():
+    """A held-out run whose error is not counted (a near-boundary verdict that differs) is
+    named apart: the text said '6 held-out cases' above '% of 5 cases' (QA)."""
+    import pandas as pd
+
+    runs = pd.DataFrame({"part": ["held-out"] * 3 + ["choice"],
+                         "error": [0.001, float("nan"), 0.03, 0.0],
+                         "verdict_agrees": [True, False, True, True],
+                         "near_boundary": [False, True, False, False],
+                         "kind": ["survive", "overturn", "record", "survive"]})
+    ho = A.held_out_stats(runs, 0.02)
+    assert (ho["n"], ho["n_all"], ho["near_disagree"]) == (2, 3, 1)
+    assert ho["beyond"] == 0.5

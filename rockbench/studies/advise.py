@@ -150,7 +150,8 @@ def convergence(errors: Sequence[tuple[float, float]], tolerance: float) -> dict
 
 def held_out_stats(runs: pd.DataFrame, tolerance: float) -> dict[str, Any]:
     """On the held-out runs of one setting (rows of :data:`rockbench.studies.tradeoff.RUN_COLUMNS`):
-    ``n`` (counted runs), ``beyond`` (fraction of them with error > tolerance), ``beyond2``
+    ``n`` (counted runs: an error that is NaN, a verdict near the boundary that differs, is
+    not counted), ``n_all`` (every held-out run), ``beyond`` (fraction of them with error > tolerance), ``beyond2``
     (count with error > 2 x tolerance), ``wrong_verdicts`` (away from the boundary, or not ok),
     ``near_disagree`` (near the boundary: reported, not counted), ``outside_band`` (records)."""
     h = runs[runs["part"] == "held-out"] if "part" in runs else runs.iloc[0:0]
@@ -158,7 +159,7 @@ def held_out_stats(runs: pd.DataFrame, tolerance: float) -> dict[str, Any]:
     counted = e[~np.isnan(e)]
     va = h["verdict_agrees"].astype(object).where(h["verdict_agrees"].notna(), True)
     near = h["near_boundary"].fillna(False).astype(bool)
-    return {"n": int(counted.size),
+    return {"n": int(counted.size), "n_all": int(len(h)),
             "beyond": float(np.mean(counted > tolerance)) if counted.size else math.nan,
             "beyond2": int(np.sum(counted > 2 * tolerance)),
             "wrong_verdicts": int(np.sum(np.isinf(counted))),
@@ -422,7 +423,10 @@ class Advice:
                 extra.append("converged: " + r["convergence"])
             ho = r.get("held_out") or {}
             if ho.get("n"):
-                extra.append(f"held-out: {100 * ho['beyond']:.0f} % of {ho['n']} cases beyond "
+                skip = ho.get("n_all", ho["n"]) - ho["n"]
+                of = (f"{ho['n']} counted cases (of {ho['n_all']}; {skip} not counted: near "
+                      f"the boundary or not measured)" if skip > 0 else f"{ho['n']} cases")
+                extra.append(f"held-out: {100 * ho['beyond']:.0f} % of {of} beyond "
                              f"the tolerance, {ho['beyond2']} beyond twice it, "
                              f"{ho['wrong_verdicts']} wrong verdicts or failed runs away from "
                              f"the boundary, {ho['outside_band']} records outside the band")
