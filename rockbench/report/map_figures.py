@@ -17,6 +17,9 @@ PANELS = (("symmetric", 1, "symmetric pulse, +"), ("symmetric", -1, "symmetric p
           ("antisymmetric", -1, "antisymmetric pulse, -"))
 
 _CMAP = ListedColormap(["#e8f1fa", "#c0392b"])
+#: Above this many cells per panel an overlay draws the engine's boundary as a line instead of
+#: a marker per cell (at 100 x 100 the markers fill the panel and hide the analytic map).
+DENSE_CELLS = 900
 
 
 def _pivot(df: pd.DataFrame, shape: str, sign: int, value: str = "overturned"):
@@ -84,7 +87,8 @@ def plot_map_panels(df: pd.DataFrame, *, title: str) -> Figure:
 
 
 def plot_map_overlay(ref: pd.DataFrame, eng: pd.DataFrame, *, name: str, title: str) -> Figure:
-    """An engine's verdicts (markers: filled square overturns, open circle survives, black
+    """An engine's verdicts (markers: filled square overturns, open circle survives; above
+    :data:`DENSE_CELLS` cells per panel its overturning boundary as a line instead; black
     ring: differs from the analytic verdict, grey x: run not ok) on the analytic map of the
     same cells (background: red overturns, light blue survives)."""
     fig = Figure(figsize=(11, 8.5))
@@ -105,10 +109,19 @@ def plot_map_overlay(ref: pd.DataFrame, eng: pd.DataFrame, *, name: str, title: 
         ok = m["status"] == "ok"
         ot = m["overturned"].fillna(False).astype(bool) & ok
         sv = ~m["overturned"].fillna(True).astype(bool) & ok
-        ax.scatter(m.loc[ot, "frequency"], m.loc[ot, "amplitude"], marker="s", s=28,
-                   color="#7b241c", label=f"{name}: overturns")
-        ax.scatter(m.loc[sv, "frequency"], m.loc[sv, "amplitude"], marker="o", s=28,
-                   facecolors="none", edgecolors="#1f4e79", label=f"{name}: survives")
+        if len(m) <= DENSE_CELLS:
+            ax.scatter(m.loc[ot, "frequency"], m.loc[ot, "amplitude"], marker="s", s=28,
+                       color="#7b241c", label=f"{name}: overturns")
+            ax.scatter(m.loc[sv, "frequency"], m.loc[sv, "amplitude"], marker="o", s=28,
+                       facecolors="none", edgecolors="#1f4e79", label=f"{name}: survives")
+        else:          # a dense map: the engine's boundary as a line, not a marker per cell
+            e = _pivot(eng, shape, sign)
+            if e is not None and e.shape[0] > 1 and e.shape[1] > 1:
+                ax.contour(e.columns.to_numpy(float), e.index.to_numpy(float),
+                           e.to_numpy(float), levels=[0.5], colors="#1f4e79",
+                           linewidths=1.4)
+                ax.plot([], [], color="#1f4e79", linewidth=1.4,
+                        label=f"{name}: its overturning boundary")
         dis = ok & (m["overturned"].astype("boolean") != m["overturned_ref"].astype("boolean"))
         dis = dis.fillna(False).astype(bool)
         ax.scatter(m.loc[dis, "frequency"], m.loc[dis, "amplitude"], marker="o", s=140,
