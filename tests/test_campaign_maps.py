@@ -147,3 +147,35 @@ def test_default_map_store_of_other_code_is_set_aside_not_refused(tmp_path, monk
     meta["code"] = "000000000000"
     (named / "_inputs.json").write_text(json.dumps(meta))
     assert main([*args, "--store", str(named)]) == 2           # a named store: refused
+
+
+# --- how a dense engine map is drawn -----------------------------------------------------------
+def test_a_dense_overlay_draws_the_engines_boundary_not_a_marker_per_cell():
+    """At the paper's resolution a marker per cell fills the panel and hides the analytic map:
+    above DENSE_CELLS cells a panel shows the engine's boundary as a line, and the cells that
+    differ ringed; a coarse map keeps its markers."""
+    import numpy as np
+    from matplotlib.collections import PathCollection
+
+    from rockbench.report.map_figures import DENSE_CELLS, plot_map_overlay
+
+    def grid(n, shift=0.0):
+        A, W = np.meshgrid(np.linspace(1, 8, n), np.linspace(1, 10, n), indexing="ij")
+        rows = []
+        for shape, sign in (("symmetric", 1), ("symmetric", -1), ("antisymmetric", 1),
+                            ("antisymmetric", -1)):
+            rows.append(pd.DataFrame({"pulse": shape, "sign": sign, "amplitude": A.ravel(),
+                                      "frequency": W.ravel(), "status": "ok",
+                                      "overturned": A.ravel() > 2 + 0.5 * W.ravel() + shift}))
+        return pd.concat(rows, ignore_index=True)
+
+    n = int(np.ceil(np.sqrt(DENSE_CELLS))) + 5
+    fig = plot_map_overlay(grid(n), grid(n, shift=0.05), name="eng", title="t")
+    ax = fig.axes[0]
+    sizes = [len(c.get_offsets()) for c in ax.collections if isinstance(c, PathCollection)]
+    assert max(sizes) < n * n // 10                    # only the ringed cells, no cell markers
+    assert any(line.get_label() == "eng: its overturning boundary" for line in ax.lines)
+    fig = plot_map_overlay(grid(6), grid(6), name="eng", title="t")
+    sizes = [len(c.get_offsets()) for c in fig.axes[0].collections
+             if isinstance(c, PathCollection)]
+    assert sum(sizes) == 36                            # a coarse map: a marker per cell
