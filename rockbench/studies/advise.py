@@ -150,9 +150,8 @@ def convergence(errors: Sequence[tuple[float, float]], tolerance: float) -> dict
 
 def held_out_stats(runs: pd.DataFrame, tolerance: float) -> dict[str, Any]:
     """On the held-out runs of one setting (rows of :data:`rockbench.studies.tradeoff.RUN_COLUMNS`):
-    ``n`` (counted runs: an error that is NaN, a verdict near the boundary that differs, is
-    not counted), ``n_all`` (every held-out run), ``beyond`` (fraction of them with error > tolerance), ``beyond2``
-    (count with error > 2 x tolerance), ``wrong_verdicts`` (away from the boundary, or not ok),
+    ``n`` (runs counted: not a NaN error), ``n_all`` (all), ``beyond`` (fraction > tolerance),
+    ``beyond2`` (count > 2 x tolerance), ``wrong_verdicts`` (away from the boundary, or not ok),
     ``near_disagree`` (near the boundary: reported, not counted), ``outside_band`` (records)."""
     h = runs[runs["part"] == "held-out"] if "part" in runs else runs.iloc[0:0]
     e = h["error"].to_numpy(dtype=float)
