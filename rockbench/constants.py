@@ -12,3 +12,10 @@ G_STANDARD = 9.80665
 #: free-rocking run) when no duration is given: the default run length of every backend and
 #: path is the motion's length + FREE_TAIL.
 FREE_TAIL = 10.0
+
+#: Free rocking [s] added to an analytic run that ended, after the ground motion, past its
+#: critical angle and not yet fallen, so that a fall under way is finished: the engines' verdict
+#: rule (a structure past its critical angle when the ground motion is over falls) decided by
+#: the reference model itself. A frame just past its critical angle leaves it at the rate p
+#: (about 1-2 1/s for the paper's frames): 20 s covers a start 1e-9 rad beyond it.
+FALL_EXTENSION = 20.0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from typing import ClassVar
 
@@ -9,6 +10,7 @@ import scipy
 
 from ..analytic.reference import reference_of
 from ..analytic.solver import AnalyticSettings, simulate
+from ..constants import FALL_EXTENSION
 from ..result import Result
 from .base import Backend, run_window
 
@@ -27,16 +29,46 @@ class AnalyticBackend(Backend):
         return True, f"scipy {scipy.__version__}"
 
     def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
+        """Integrate from ``phi0`` [rad] for ``duration`` [s] (default: the motion + 10 s).
+
+        A run that ends after the ground motion past its critical angle, not yet fallen, is
+        integrated :data:`~rockbench.constants.FALL_EXTENSION` seconds longer: if it falls, the
+        longer run is returned (its history ends at the fall, after ``duration``), so that the
+        reference and the engines' collapse rule give one verdict (``docs/conventions.md``)."""
         t0, t_end = run_window(self.scene, motion, duration, phi0, settings=self.settings)
         cpu = time.process_time()
         if _compiled_path(self.settings.method, motion):   # the numba path (maps, records)
             from ..analytic.compiled import simulate_compiled as integrate
         else:                                              # the solve_ivp reference
             integrate = simulate
+        ref = reference_of(self.scene)
         result = integrate(self.scene, motion, duration=t_end - t0, phi0=phi0,
-                           settings=self.settings, reference=reference_of(self.scene))
+                           settings=self.settings, reference=ref)
+        if _fall_under_way(result, ref, motion, t_end):
+            # the run ended after the ground motion past the critical angle: the fall is
+            # finished (one verdict rule for every backend, docs/conventions.md)
+            longer = integrate(self.scene, motion, duration=t_end - t0 + FALL_EXTENSION,
+                               phi0=phi0, settings=self.settings, reference=ref)
+            if longer.summary.overturned:
+                result = longer
         result.cost.cpu_s = time.process_time() - cpu
         return result
+
+
+def _fall_under_way(result: Result, ref, motion, t_end: float) -> bool:
+    """Whether an ok run that did not overturn ended at or after the end of the ground motion
+    (``t_end`` [s]; free rocking has none) with |phi| past the critical angle of its direction
+    and device state: nothing can bring it back, it is falling."""
+    s = result.summary
+    if s.status != "ok" or s.overturned or not s.exceeded_critical or result.history.empty:
+        return False
+    if motion is not None and t_end < float(motion.t_end):
+        return False                   # the ground may still bring it back: undecided
+    last = result.history.iloc[-1]
+    phi = float(last["phi"])
+    side = 1 if phi > 0 else -1
+    crit = ref.critical[(side, bool(last["devices_intact"]))]
+    return math.isfinite(crit) and side * phi > crit
 
 
 def _compiled_path(method: str, motion) -> bool:

@@ -28,6 +28,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
+from ..constants import FALL_EXTENSION
 from ..errors import ParameterError, RockbenchError
 from ..sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
                               error_rows, load_map, map_rows, open_map_store, part_files,
@@ -121,11 +122,6 @@ def cell_duration(scene, W: float, tail: float | None) -> float | None:
     return 6.0 * 2.0 * math.pi / (W * scene.p) + tail
 
 
-#: Free rocking [s] added to an analytic cell that exceeded its critical angle and had not
-#: fallen when its run ended, so that a fall under way is finished (the verdict rule of
-#: :data:`MAP_COLUMNS` ``overturned``). A frame just past its critical angle leaves it at the
-#: rate p (about 1-2 1/s for the paper's frames): 20 s covers a start 1e-9 rad beyond it.
-FALL_EXTENSION = 20.0
 
 
 def _load_scene_ref(ref: Any, overrides: dict | None = None):
@@ -181,7 +177,7 @@ def _analytic_chunk(args: tuple) -> pd.DataFrame:
     The verdict rule is the engines' (``engines/loop.py`` ``_collapse``): a structure that is
     past its critical angle when the ground motion is over falls. The reference model does not
     stop short of the fall angle, so a cell that exceeded its critical angle and had not
-    fallen by the end of its run is run again :data:`FALL_EXTENSION` seconds longer: a fall
+    fallen by the end of its run is run again :data:`~rockbench.constants.FALL_EXTENSION` seconds longer: a fall
     under way is finished (its row is the longer run's); a frame that came back keeps its
     verdict."""
     scene_ref, overrides, cells, method, tail = args
