@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ParameterError
-from .result import Result
+from .result import Result, as_float
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only
     from .scene.scene import Scene
@@ -211,10 +211,6 @@ def _first_time(events: pd.DataFrame, kind: str) -> float:
     return float(ev["t"].iloc[0]) if len(ev) else math.nan
 
 
-def _num(x: Any) -> float:
-    return math.nan if x is None else float(x)
-
-
 def _engine_version(result: Result) -> str:
     v = result.settings.get("engine_version") if isinstance(result.settings, dict) else None
     if v:
@@ -275,7 +271,7 @@ def eta_rows(result: Result, reference: Result) -> list[dict[str, Any]]:
     for k, ev in enumerate(result.impacts().itertuples(index=False)):
         d = int(ev.direction)
         ref = float(eta_ref[d]) if d in eta_ref else math.nan
-        e = _num(ev.eta)
+        e = as_float(ev.eta)
         rows.append({"backend": result.backend, "impact": k, "t": float(ev.t), "direction": d,
                      "eta": e, "eta_ref": ref,
                      "rel_error": e / ref - 1.0 if math.isfinite(e) and ref else math.nan})
@@ -287,7 +283,7 @@ def _energy_gained(result: Result) -> bool:
     eta^2 I_after(0) / I_before(0) > 1, the structure rocking in -direction before the impact
     and in direction after it (see METRIC_COLUMNS)."""
     for ev in result.impacts().itertuples(index=False):
-        e, after = _num(ev.eta), int(ev.direction)
+        e, after = as_float(ev.eta), int(ev.direction)
         if not math.isfinite(e):
             continue
         if abs(e) >= 1.0:
@@ -346,7 +342,7 @@ def metrics(result: Result, reference: Result) -> dict[str, Any]:
     if err.size:
         row["nrmse"] = float(np.sqrt(np.mean(err * err)))
         row["max_abs_error_over_alpha"] = float(np.max(np.abs(err)))
-    row["t_uplift_error"] = _num(s.t_uplift) - _num(sr.t_uplift)
+    row["t_uplift_error"] = as_float(s.t_uplift) - as_float(sr.t_uplift)
     row["t_first_impact_error"] = (_first_time(result.events, "impact")
                                    - _first_time(reference.events, "impact"))
     row["n_impacts"] = int(s.n_impacts)
@@ -361,15 +357,15 @@ def metrics(result: Result, reference: Result) -> dict[str, Any]:
     row["eta_max_rel_error"] = float(rel.max()) if rel.size else math.nan
     row["overturned"] = bool(s.overturned)
     row["verdict_agrees"] = bool(s.overturned) == bool(sr.overturned)
-    row["t_overturn_error"] = (_num(s.t_overturn) - _num(sr.t_overturn)
+    row["t_overturn_error"] = (as_float(s.t_overturn) - as_float(sr.t_overturn)
                                if s.overturned and sr.overturned else math.nan)
     row["fractured"] = bool(s.fractured)
     row["fracture_agrees"] = bool(s.fractured) == bool(sr.fractured)
-    row["t_fracture_error"] = (_num(s.t_fracture) - _num(sr.t_fracture)
+    row["t_fracture_error"] = (as_float(s.t_fracture) - as_float(sr.t_fracture)
                                if s.fractured and sr.fractured else math.nan)
     row["energy_gained_at_impact"] = _energy_gained(result)
-    row["max_penetration"] = _num(s.max_penetration)
-    row["max_sliding"] = _num(s.max_sliding)
+    row["max_penetration"] = as_float(s.max_penetration)
+    row["max_sliding"] = as_float(s.max_sliding)
     row["contact_opened"] = None if s.contact_opened is None else bool(s.contact_opened)
     return row
 

@@ -25,7 +25,7 @@ import pandas as pd
 
 __all__ = ["Result", "Summary", "Cost", "HISTORY_COLUMNS", "CONTACT_COLUMNS", "EVENT_COLUMNS",
            "SUMMARY_FIELDS", "COST_FIELDS", "EVENT_KINDS", "STATUSES", "output_grid",
-           "motion_label"]
+           "motion_label", "as_float"]
 
 #: History columns and units, in order.
 HISTORY_COLUMNS: dict[str, str] = {
@@ -97,6 +97,15 @@ COST_FIELDS: dict[str, str] = {
 
 EVENT_KINDS = ("uplift", "impact", "peak", "critical", "fracture", "overturn", "rest")
 STATUSES = ("ok", "diverged", "invalid")
+
+
+def as_float(x: Any) -> float:
+    """``x`` as a float; NaN when it is missing (None, NA) or not a number (the one reader of
+    optional numbers in result rows and tables)."""
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        return math.nan
 
 
 def jsonable(x: Any) -> Any:

@@ -18,6 +18,8 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
+from ..result import as_float
+
 __all__ = ["decision_sentences", "decision_table", "decision_html", "evidence_note", "pct"]
 
 #: Advice statuses of a setting within the tolerance on the chosen cases that is not
@@ -42,18 +44,10 @@ def pct(x: Any, digits: int = 2) -> str:
     return f"{100.0 * v:.{digits}f} %"
 
 
-def _num(x: Any) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return math.nan
-    return v
-
-
 def _held_out(row: Mapping[str, Any]) -> float:
     for c in _HELD_OUT:
         if c in row and not pd.isna(row[c]):
-            return _num(row[c])
+            return as_float(row[c])
     return math.nan
 
 
@@ -75,12 +69,12 @@ def decision_sentences(advice: pd.DataFrame, scene: str) -> list[str]:
             ho = _held_out(b)
             conf = (f", {pct(ho)} on held-out cases" if math.isfinite(ho) else "")
             text = (f"For {pct(tol, 1 if tol < 0.01 else 0)} on {scene}: use {b['engine']} at "
-                    f"{b['setting']} ({_num(b['cpu_per_sim_s']):.3g} CPU s per simulated s; "
+                    f"{b['setting']} ({as_float(b['cpu_per_sim_s']):.3g} CPU s per simulated s; "
                     f"worst error {pct(b['worst_error'])} on the chosen cases{conf})")
             if len(meets) > 1:
                 n = meets.iloc[1]
                 text += (f"; next cheapest: {n['engine']} at {n['setting']} "
-                         f"({_num(n['cpu_per_sim_s']):.3g} CPU s/s)")
+                         f"({as_float(n['cpu_per_sim_s']):.3g} CPU s/s)")
             out.append(text + ".")
         else:
             t = pct(tol, 1 if tol < 0.01 else 0)
@@ -143,12 +137,12 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
             if len(m):
                 r = m.iloc[0]
                 ho = _held_out(r)
-                row[f"within {t}"] = (f"{r['setting']}: {_num(r['cpu_per_sim_s']):.3g} CPU s/s, "
+                row[f"within {t}"] = (f"{r['setting']}: {as_float(r['cpu_per_sim_s']):.3g} CPU s/s, "
                                       f"worst {pct(r['worst_error'])}"
                                       + (f", held-out {pct(ho)}" if math.isfinite(ho) else ""))
             else:
                 r = g.iloc[0]
-                err = _num(r.get("worst_error"))
+                err = as_float(r.get("worst_error"))
                 st = str(r.get("status", ""))
                 word = st if st in _ALMOST else "not reached"
                 row[f"within {t}"] = (word + (f" (best {pct(err)} at {r['setting']})"

@@ -44,6 +44,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ..result import as_float
 
 __all__ = ["ADVISE_DTS", "QUICK_DTS", "CONTACT_VARIANTS", "Advice", "advise", "decide",
            "convergence", "held_out_stats", "advice_for_report", "precision_knob",
@@ -168,7 +169,7 @@ def held_out_stats(runs: pd.DataFrame, tolerance: float) -> dict[str, Any]:
 
 
 def _pct(e: float) -> str:
-    e = _num(e)
+    e = as_float(e)
     return "not run" if math.isnan(e) else "inf" if not math.isfinite(e) else f"{100 * e:.3g} %"
 
 
@@ -179,14 +180,6 @@ def _fmt_err(e: float) -> str:
 def _variant(label: str, knob: str = "dt") -> str:
     """The setting label without its precision knob (the contact variant): "" for defaults."""
     return ",".join(p for p in str(label).split(",") if not p.startswith(f"{knob}="))
-
-
-def _num(x: Any) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return math.nan
-    return v
 
 
 def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | None = None,
@@ -230,15 +223,15 @@ def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | No
         best_meet, best_other = None, None
         for var, gv in g.groupby(g["setting"].map(lambda s: _variant(s, knob)), sort=False):
             gv = gv.sort_values(kcol, ascending=False)
-            errs = [(float(r[kcol]), _num(r[ce])) for _, r in gv.iterrows()]
+            errs = [(float(r[kcol]), as_float(r[ce])) for _, r in gv.iterrows()]
             errs = [(s, e if not math.isnan(e) else math.inf) for s, e in errs]
             conv = convergence(errs, tolerance)
             base = {"engine": n, "variant": var, "erratic": conv["erratic"],
                     "convergence": conv["note"], "curve": conv["curve"]}
             if conv["index"] is not None:
                 r = gv.iloc[conv["index"]]
-                held = _num(r.get("worst_error_heldout", math.nan)) \
-                    if "worst_error_heldout" in gv else _num(r[ce])
+                held = as_float(r.get("worst_error_heldout", math.nan)) \
+                    if "worst_error_heldout" in gv else as_float(r[ce])
                 row = {**base, **_row(r, ce), "worst_error_heldout": held}
                 if math.isnan(held):
                     row.update(meets=False, status="unconfirmed",
@@ -256,7 +249,7 @@ def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | No
                 fin = gv.assign(_e=[e for _, e in errs]).sort_values(["_e", "cpu_per_sim_s"])
                 r = fin.iloc[0]
                 row = {**base, **_row(r, ce),
-                       "worst_error_heldout": _num(r.get("worst_error_heldout", math.nan)),
+                       "worst_error_heldout": as_float(r.get("worst_error_heldout", math.nan)),
                        "meets": False, "status": conv["status"]}
                 tried = ", ".join(str(s) for s in gv["setting"])
                 row["reason"] = (f"{conv['status']}: best choice error "
@@ -285,13 +278,13 @@ def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | No
 
 def _row(r: pd.Series, ce: str) -> dict[str, Any]:
     return {"setting": str(r["setting"]), "dt": float(r["dt"]),
-            "worst_error": _num(r.get("worst_error", r[ce])),
-            "worst_error_choice": _num(r[ce]),
-            "cpu_per_sim_s": _num(r["cpu_per_sim_s"]),
-            "real_time_factor": _num(r["real_time_factor"]),
-            "build_cpu_s": _num(r.get("build_cpu_s", math.nan)),
-            "warmup_cpu_s": _num(r.get("warmup_cpu_s", math.nan)),
-            "near_disagree": int(_num(r.get("near_disagree", 0)) or 0)}
+            "worst_error": as_float(r.get("worst_error", r[ce])),
+            "worst_error_choice": as_float(r[ce]),
+            "cpu_per_sim_s": as_float(r["cpu_per_sim_s"]),
+            "real_time_factor": as_float(r["real_time_factor"]),
+            "build_cpu_s": as_float(r.get("build_cpu_s", math.nan)),
+            "warmup_cpu_s": as_float(r.get("warmup_cpu_s", math.nan)),
+            "near_disagree": int(as_float(r.get("near_disagree", 0)) or 0)}
 
 
 def _check_tolerance(tolerance: Any) -> float:
@@ -410,8 +403,8 @@ class Advice:
                     f"{_pct(r.get('worst_error_heldout', math.nan))}")
             if r["status"] == "meets":
                 head += (f", {r['cpu_per_sim_s']:.3g} CPU s/s (+ build "
-                         f"{_num(r.get('build_cpu_s')):.2g} s per run, warm-up "
-                         f"{_num(r.get('warmup_cpu_s')):.2g} s once)")
+                         f"{as_float(r.get('build_cpu_s')):.2g} s per run, warm-up "
+                         f"{as_float(r.get('warmup_cpu_s')):.2g} s once)")
             else:
                 head += f": {r['reason']}"
             lines.append(head)
@@ -439,7 +432,7 @@ class Advice:
             lines.append("  contact settings measured (impact probes: free-rocking eta and the "
                          "smallest-uplift record, choice part):")
             for _, c in self.contact.iterrows():
-                ch = _num(c.get("change"))
+                ch = as_float(c.get("change"))
                 lines.append(f"    {c['engine']} {c['variant'] or 'defaults'}: probe error "
                              f"{_pct(c['probe_error'])} (eta {_pct(c['eta_error'])}, record "
                              f"{_pct(c['record_error'])})"
