@@ -27,6 +27,10 @@ bench: $(STAMP)
 	$(PY) benchmarks/run.py
 	$(PY) benchmarks/loop_overhead.py
 	$(PY) benchmarks/compiled_analytic.py
+	$(PY) benchmarks/analytic_floor.py
+	$(PY) benchmarks/adaptive_map.py --axes both
+	$(PY) benchmarks/map_cell.py
+	$(PY) benchmarks/startup.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache build *.egg-info
