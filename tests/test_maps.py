@@ -177,46 +177,48 @@ def test_a_measured_map_is_reused_only_when_it_reproduces(tmp_path):
     assert none is None and "does not reproduce" in why and "max |phi|/alpha" in why
 
 
-def _committed_maps() -> list[tuple[str, str]]:
-    """(scene, engine) of every engine map committed under ``reports/engine-maps`` (an engine
-    whose map was never measured - Drake's, until ``report --full`` runs - has none: the
-    report says so)."""
+def _committed_maps() -> list[tuple[str, str, tuple[int, int]]]:
+    """(scene, engine, grid) of every engine map committed under ``reports/engine-maps`` (the
+    plan's 12 x 12 x 4 and the paper's 100 x 100 x 4 measured by ``report --full``)."""
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1] / "reports" / "engine-maps"
     out = []
     for p in sorted(root.glob("*_*_*x*.parquet")):
-        scene, engine, _ = p.name.rsplit("_", 2)
-        out.append((scene, engine))
+        scene, engine, grid = p.name[:-len(".parquet")].rsplit("_", 2)
+        out.append((scene, engine, tuple(int(v) for v in grid.split("x"))))
     return out
 
 
 def test_the_maps_of_the_committed_engines_are_committed():
-    """The four engines measured before Drake keep their maps on both frames."""
-    have = set(_committed_maps())
+    """Every engine keeps its 12 x 12 x 4 map on both frames; a map at the paper's resolution
+    covers the whole grid."""
+    have = {(s, e) for s, e, g in _committed_maps() if g == (12, 12)}
     for scene in ("paper-asymmetric", "paper-asymmetric-hybrid-eps1"):
-        for engine in ("pymunk", "mujoco", "pybullet", "opensees"):
+        for engine in ("pymunk", "mujoco", "pybullet", "opensees", "drake"):
             assert (scene, engine) in have
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene, engine", _committed_maps())
-def test_the_committed_engine_maps_reproduce(engine, scene):
-    """The report's 12 x 12 x 4 engine maps (``reports/engine-maps``, measured by ``rockbench
-    report --full``) are reproduced by the current code at their sample cells; when this
-    fails, rerun ``rockbench report --full`` and commit the maps it measures."""
+@pytest.mark.parametrize("scene, engine, grid", _committed_maps(),
+                         ids=[f"{s}-{e}-{g[0]}x{g[1]}" for s, e, g in _committed_maps()])
+def test_the_committed_engine_maps_reproduce(engine, scene, grid):
+    """The report's engine maps (``reports/engine-maps``: 12 x 12 x 4, and 100 x 100 x 4
+    measured adaptively by ``rockbench report --full``) are reproduced by the current code at
+    their sample cells; when this fails, rerun ``rockbench report --full`` and commit the maps
+    it measures."""
     from pathlib import Path
 
-    from rockbench.campaign.maps import ENGINE_AXES, MEASURED_GRID
+    from rockbench.campaign.maps import ENGINE_AXES
     from rockbench.studies.maps import reuse_map
 
     if engine not in rb.available_backends():
         pytest.skip(f"{engine} is not installed")
     root = Path(__file__).resolve().parents[1] / "reports" / "engine-maps"
-    path = root / f"{scene}_{engine}_{MEASURED_GRID[0]}x{MEASURED_GRID[1]}.parquet"
-    df, why = reuse_map(path, scene, engine, **dict(ENGINE_AXES, grid=MEASURED_GRID))
+    path = root / f"{scene}_{engine}_{grid[0]}x{grid[1]}.parquet"
+    df, why = reuse_map(path, scene, engine, **dict(ENGINE_AXES, grid=grid))
     assert df is not None, why
-    assert len(df) == MEASURED_GRID[0] * MEASURED_GRID[1] * 4
+    assert len(df) == grid[0] * grid[1] * 4
     assert (df["status"] == "ok").mean() >= 0.95
 
 
