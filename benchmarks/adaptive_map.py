@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from rockbench.studies.maps import run_map  # noqa: E402
 from rockbench.sweep.adaptive import coarse_stride  # noqa: E402
-from run import machine  # noqa: E402
+from run import machine_section  # noqa: E402
 
 SCENES = ["paper-symmetric", "paper-asymmetric", "paper-asymmetric-hybrid",
           "paper-asymmetric-hybrid-eps2", "paper-asymmetric-hybrid-eps1"]
@@ -93,16 +93,14 @@ def main(argv=None) -> int:
                          f"{max(tf):.3g}) | {ma:.3g} ({min(ta):.3g}-{max(ta):.3g}) | "
                          f"{ma / mf:.2f} |")
             print(lines[-1], flush=True)
-    mc = machine()
-    mc["load average (1 min) before / after"] = f"{load0:.2f} / {os.getloadavg()[0]:.2f}"
     text = ("# An adaptive map against the full grid (issue 27 section 2)\n\n"
             f"Measured side by side in one run of `benchmarks/adaptive_map.py --grid {args.grid}"
             f" --repeat {args.repeat} --axes {args.axes} --engine {args.engine}`: "
             f"{args.grid} x {args.grid} x 4 cells, the adaptive map's coarse stride "
             f"{stride}, no store, one local worker, process CPU time of the parent and its "
             "worker (median (min-max) of the repeats, interleaved, after an untimed pass of "
-            "each) on a machine shared with other processes.\n\n## Machine\n\n"
-            + "\n".join(f"- {k}: {v}" for k, v in mc.items()) + "\n\n## Maps\n\n"
+            "each) on a machine shared with other processes.\n\n"
+            + machine_section(load0) + "\n\n## Maps\n\n"
             + "\n".join(lines) + "\n\nThe fraction simulated is of cells, not of CPU time: "
             "the inferred cells are mostly the cheap ones (at rest, or overturned at once).\n")
     out = Path(args.out)

@@ -44,7 +44,7 @@ from rockbench.engines import mujoco_batch as MB  # noqa: E402
 from rockbench.engines.base import run_window  # noqa: E402
 from rockbench.sweep import runs  # noqa: E402
 from rockbench.sweep.cases import normalize_case  # noqa: E402
-from run import machine  # noqa: E402
+from run import machine_section  # noqa: E402
 
 SCENE = "paper-asymmetric"
 
@@ -181,13 +181,11 @@ def main(argv=None) -> int:
             lines.append(f"| {engine} | {name} | {med / n:.4g} ({lo / n:.3g}-{hi / n:.3g}) | "
                          f"{med / raw[0]:.3g} |")
             print(lines[-1], flush=True)
-    mc = machine()
-    mc["load average (1 min) before / after"] = f"{load0:.2f} / {os.getloadavg()[0]:.2f}"
     text = ("# A map cell against the engine's own stepping (issue 27 section 3)\n\n"
             f"Measured side by side in one run of `benchmarks/map_cell.py --repeat "
             f"{args.repeat}` on a machine shared with other processes (process CPU time, so "
-            "their load enters only through caches and frequency).\n\n## Machine\n\n"
-            + "\n".join(f"- {k}: {v}" for k, v in mc.items()) + "\n\n## Cells\n\n"
+            "their load enters only through caches and frequency).\n\n"
+            + machine_section(load0) + "\n\n## Cells\n\n"
             + "\n".join(lines) + "\n\n## Checks\n\n" + "\n".join(checks) + "\n")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

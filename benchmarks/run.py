@@ -43,6 +43,14 @@ def machine() -> dict:
                                  for r in rb.engine_info())}
 
 
+def machine_section(load0: float) -> str:
+    """The ``## Machine`` section of a result file: :func:`machine` and the load average
+    (1 min) ``load0`` before the measurement and now, after it."""
+    mc = machine()
+    mc["load average (1 min) before / after"] = f"{load0:.2f} / {os.getloadavg()[0]:.2f}"
+    return "## Machine\n\n" + "\n".join(f"- {k}: {v}" for k, v in mc.items())
+
+
 def cases(quick: bool):
     """(label, scene, motion, phi0 [rad], duration [s]) of the benchmark cases (rockbench's
     case catalogue, ``[benchmarks]`` of ``rockbench/scenarios/cases.toml``)."""

@@ -484,12 +484,12 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     if choice.get("stress") is not None:
         files["stress.csv"] = choice["stress"]
         files["stress_breaking_points.csv"] = choice["breaks"]
+    from ..compare import ETA_COLUMNS, METRIC_COLUMNS
     for name, df in files.items():
         # an undocumented column with no value (left by rows a reused store kept from older
         # code) is not written: the files do not depend on the store's history
         doc = CAMPAIGN_COLUMNS.get(name)
         if doc is not None:
-            from ..compare import ETA_COLUMNS, METRIC_COLUMNS
             kept = {*doc, *METRIC_COLUMNS, *ETA_COLUMNS}     # "(then)": the metric columns
             df = df.drop(columns=[c for c in df.columns if c not in kept and df[c].isna().all()])
         df.to_csv(out / name, index=False)

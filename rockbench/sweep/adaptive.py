@@ -31,6 +31,8 @@ def coarse_stride(na: int, nw: int) -> int:
     """The coarse pass's stride on a grid of ``na`` x ``nw`` points (:data:`COARSE_STRIDE`, or
     :data:`COARSE_STRIDE_FINE` when both are at least :data:`FINE_GRID`)."""
     return COARSE_STRIDE_FINE if min(na, nw) >= FINE_GRID else COARSE_STRIDE
+
+
 #: Adaptive maps: a surviving corner whose max |phi| reaches this fraction of the critical
 #: angle makes its block "near" (refined), so that survival close to overturning is looked at.
 NEAR_CRITICAL = 0.7
