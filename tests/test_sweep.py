@@ -290,6 +290,50 @@ def test_execute_hands_every_result_over(executor):
     assert got == {str(i): i * i for i in range(5)}
 
 
+def _pid(_x):
+    return os.getpid()
+
+
+def _pids(n: int) -> set[int]:
+    got: dict = {}
+    execute(_pid, [(str(i), i) for i in range(n)], on_result=got.__setitem__,
+            crashed=lambda item, reason: None, executor="process", workers=2, progress=False)
+    return set(got.values())
+
+
+def test_kept_pools_serve_every_call_in_the_block_and_end_with_it():
+    from rockbench.sweep.executors import kept_pools
+
+    alone = _pids(4), _pids(4)
+    assert not alone[0] & alone[1]              # two calls, two pools
+    with kept_pools():
+        a, b, one = _pids(6), _pids(6), _pids(1)
+        with kept_pools():                      # nested: the outer block's pool
+            c = _pids(3)
+        pool = a | b | c | one
+        assert len(pool) <= 2 and os.getpid() not in pool     # one pool of two workers
+    for pid in pool:                            # shut down, workers joined (reaped)
+        with pytest.raises(ProcessLookupError):
+            os.kill(pid, 0)
+    assert not _pids(2) & pool                 # outside: a pool of its own again
+
+
+@pytest.mark.skipif(multiprocessing.get_start_method() != "fork",
+                    reason="the crashing backend reaches workers by fork only")
+def test_a_dying_worker_in_a_kept_pool_is_replaced(monkeypatch):
+    from rockbench.sweep.executors import kept_pools
+
+    monkeypatch.setitem(REGISTRY, "crasher", f"{__name__}:_Crasher")
+    good = {"scene": "housner-block", "engine": "analytic", "phi0": 0.1, "duration": 0.5}
+    crash = dict(good, engine="crasher")
+    with kept_pools():
+        first = run_cases([crash, good], executor="process", workers=2, progress=False)
+        after = run_cases([good, dict(good, phi0=0.05)], executor="process", workers=2,
+                          progress=False)
+    assert list(first["status"]) == ["error", "ok"]
+    assert list(after["status"]) == ["ok", "ok"]
+
+
 # --- the catalogue ------------------------------------------------------------------------------
 def test_catalogue_holds_the_cross_engine_cases_and_the_campaign_plan():
     c = catalogue()

@@ -278,11 +278,13 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
             return _run_cells(sc, scene_ref, ref_name, engine, settings, method, overrides,
                               cells, stored, *common)
         from ..sweep.adaptive import adaptive_map
+        from ..sweep.executors import kept_pools
 
-        return adaptive_map(sc, lambda cs, st: _run_cells(
-            sc, scene_ref, ref_name, engine, settings, method, overrides, cs, st, *common),
-            _axes(grid, amplitude, frequency), [PULSES[p] for p in _pulses(pulses)],
-            stored)
+        with kept_pools():            # the rounds share one pool of workers
+            return adaptive_map(sc, lambda cs, st: _run_cells(
+                sc, scene_ref, ref_name, engine, settings, method, overrides, cs, st,
+                *common), _axes(grid, amplitude, frequency),
+                [PULSES[p] for p in _pulses(pulses)], stored)
 
     if path is None:
         return go(None)

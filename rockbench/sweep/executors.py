@@ -20,23 +20,27 @@ that escapes stops the run. Ctrl-C cancels the queued items at once; results alr
 Local pools never have more workers than cores (:func:`local_workers`: a larger ``workers`` is
 capped, with a warning), and their workers die with the process that started them
 (:func:`_die_with_parent`: ``PR_SET_PDEATHSIG`` on Linux, so a ``kill -9`` of the parent leaves
-no orphan computing on). A Dask scheduler address is checked for its form and connected to
+no orphan computing on). Inside :func:`kept_pools`, a local pool outlives its :func:`execute`
+call and serves the next ones (an adaptive map's rounds), so that its workers' imports and
+compiled code are paid once. A Dask scheduler address is checked for its form and connected to
 within :data:`DASK_CONNECT_TIMEOUT` seconds; either failure is a one-line
 :class:`~rockbench.errors.RockbenchError` naming the address.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import os
 import re
 import warnings
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from ..errors import ParameterError, RockbenchError
 
-__all__ = ["EXECUTORS", "execute", "check_options", "cpu_count", "local_workers",
+__all__ = ["EXECUTORS", "execute", "check_options", "cpu_count", "kept_pools", "local_workers",
            "DASK_CONNECT_TIMEOUT"]
 
 #: Seconds to wait for a Dask scheduler to answer before giving up (Dask's own default is 30).
@@ -123,6 +127,30 @@ def _process_pool(workers: int):
                                initargs=(os.getpid(),))
 
 
+#: The local pools kept by :func:`kept_pools` (size -> executor), or None outside it.
+_KEPT: contextvars.ContextVar[dict[int, Any] | None] = contextvars.ContextVar(
+    "rockbench_kept_pools", default=None)
+
+
+@contextlib.contextmanager
+def kept_pools() -> Iterator[None]:
+    """Within this block, the local process pool of an :func:`execute` call is kept and
+    reused by the next calls with as many workers (their imports, compiled code and caches
+    are paid once: an adaptive map runs a few rounds of cells); the pools are shut down, their
+    workers joined, when the block ends. Nested blocks share the outer one's pools."""
+    if _KEPT.get() is not None:
+        yield
+        return
+    token = _KEPT.set({})
+    try:
+        yield
+    finally:
+        pools = _KEPT.get() or {}
+        _KEPT.reset(token)
+        for ex in pools.values():
+            ex.shutdown(wait=True, cancel_futures=True)
+
+
 def _crash_reason(e: BaseException) -> str:
     return f"worker process died while running this case (segfault or out of memory?): {e}"
 
@@ -168,8 +196,7 @@ def execute(fn: Callable[[Any], Any], items: Sequence[Item], *,
                 show(label(item))
                 done(k, fn(item))
         elif executor == "process":
-            _pool(fn, items, min(local_workers(workers), len(items)), done, show, label,
-                  crashed)
+            _pool(fn, items, local_workers(workers), done, show, label, crashed)
         else:
             _dask(fn, items, workers, dask_address, done, show, label, crashed)
     finally:
@@ -177,15 +204,24 @@ def execute(fn: Callable[[Any], Any], items: Sequence[Item], *,
             bar.close()
 
 
-def _pool(fn, items: list[Item], workers: int, done, show, label, crashed) -> None:
-    """A process pool with at most ``workers`` items in flight; a dead pool makes every item in
-    flight a suspect, rerun alone (:func:`_isolated`)."""
+def _pool(fn, items: list[Item], size: int, done, show, label, crashed) -> None:
+    """A process pool of ``size`` workers (one kept by :func:`kept_pools` when there is one),
+    at most ``size`` items in flight; a dead pool makes every item in flight a suspect, rerun
+    alone (:func:`_isolated`)."""
     from concurrent.futures import FIRST_COMPLETED, wait
     from concurrent.futures.process import BrokenProcessPool
 
+    kept = _KEPT.get()
+    # a pool of its own is never larger than the work; a kept one has the requested size
+    workers = size if kept is not None else min(size, len(items))
     queue = deque(items)
     inflight: dict[Any, Item] = {}
-    ex = _process_pool(workers)
+    ex = kept.get(workers) if kept is not None else None
+    if ex is None:
+        ex = _process_pool(workers)
+        if kept is not None:
+            kept[workers] = ex
+    finished_ok = False
     try:
         while queue or inflight:
             while queue and len(inflight) < workers:
@@ -211,9 +247,15 @@ def _pool(fn, items: list[Item], workers: int, done, show, label, crashed) -> No
                     show(f"isolating {label(item)}")
                     done(k, _isolated(fn, item, crashed))
                 ex = _process_pool(workers)
+                if kept is not None:
+                    kept[workers] = ex
+        finished_ok = True
     finally:
-        # on Ctrl-C: drop the queued items at once (finished ones are already handed over)
-        ex.shutdown(wait=False, cancel_futures=True)
+        if kept is None or not finished_ok:
+            # on Ctrl-C: drop the queued items at once (finished ones are already handed over)
+            ex.shutdown(wait=False, cancel_futures=True)
+            if kept is not None:
+                kept.pop(workers, None)
 
 
 def _isolated(fn, item: Any, crashed) -> Any:
