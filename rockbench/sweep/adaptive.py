@@ -35,6 +35,8 @@ def coarse_stride(na: int, nw: int) -> int:
 
 #: Adaptive maps: a surviving corner whose max |phi| reaches this fraction of the critical
 #: angle makes its block "near" (refined), so that survival close to overturning is looked at.
+#: (A block whose corners all overturn is refined when they overturn in both modes, with and
+#: without an impact: the islands of survival inside the overturning region lie between.)
 NEAR_CRITICAL = 0.7
 
 
@@ -43,8 +45,10 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
                  stored: tuple[Path, pd.DataFrame] | None) -> pd.DataFrame:
     """An adaptive map (issue 27): simulate the corners of the coarse blocks (every
     :func:`coarse_stride`-th A and W, and the last), then, level by level, halve every block
-    whose corners do not all give one verdict with status ok, or where a surviving corner
-    rocked beyond :data:`NEAR_CRITICAL` of the critical angle, until blocks are one cell wide;
+    whose corners do not all give one verdict with status ok, where a surviving corner
+    rocked beyond :data:`NEAR_CRITICAL` of the critical angle, or whose corners all overturn
+    but some after an impact and some without one (the two overturning modes, between which
+    islands of survival lie: Zhang & Makris 2001), until blocks are one cell wide;
     the cells of a block whose corners agree take their verdict (``inferred`` True, peak and
     impacts unknown). ``compute(cells, stored)`` simulates cells (reusing stored ones) and
     returns their rows; ``pulses`` are (shape, sign) pairs, ``axes`` the grid's A and W
@@ -104,7 +108,9 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
             over = {bool(c.overturned) for c in cs if ok}
             near = any(not bool(c.overturned) and c.max_abs_phi_over_alpha >= NEAR_CRITICAL
                        * crit for c in cs if ok)
-            if ok and len(over) == 1 and not near:
+            # overturning after an impact and without one: an island of survival lies between
+            modes = {_impacted(c) for c in cs} if ok and over == {True} else set()
+            if ok and len(over) == 1 and not near and len(modes) <= 1:
                 v = over.pop()
                 for a in range(a0, a1 + 1):
                     for w in range(w0, w1 + 1):
@@ -156,3 +162,12 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
                      method=frames[0].attrs.get("method", "") if frames else "",
                      reused=reused, cells_run=run, inferred=len(guessed))
     return out
+
+
+def _impacted(c) -> bool:
+    """Whether a map row's run had an impact (None or NaN: unknown, taken as none)."""
+    n = c.n_impacts
+    try:
+        return n is not None and float(n) > 0
+    except (TypeError, ValueError):
+        return False
