@@ -35,8 +35,11 @@ def coarse_stride(na: int, nw: int) -> int:
 
 #: Adaptive maps: a surviving corner whose max |phi| reaches this fraction of the critical
 #: angle makes its block "near" (refined), so that survival close to overturning is looked at.
-#: (A block whose corners all overturn is refined when they overturn in both modes, with and
-#: without an impact: the islands of survival inside the overturning region lie between.)
+#: (On a grid of at least FINE_GRID points a side, whose coarse blocks are 8 cells wide, a
+#: block whose corners all overturn is also refined when they overturn in both modes, with
+#: and without an impact: the islands of survival inside the overturning region lie between.
+#: Below, the blocks of 4 cells miss no more than 0-2 cells without it, and it would take the
+#: 24 x 24 maps of the paper's frames from 31 % of the cells simulated to 39 %.)
 NEAR_CRITICAL = 0.7
 
 
@@ -46,9 +49,10 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
     """An adaptive map (issue 27): simulate the corners of the coarse blocks (every
     :func:`coarse_stride`-th A and W, and the last), then, level by level, halve every block
     whose corners do not all give one verdict with status ok, where a surviving corner
-    rocked beyond :data:`NEAR_CRITICAL` of the critical angle, or whose corners all overturn
-    but some after an impact and some without one (the two overturning modes, between which
-    islands of survival lie: Zhang & Makris 2001), until blocks are one cell wide;
+    rocked beyond :data:`NEAR_CRITICAL` of the critical angle, or (on a grid of at least
+    :data:`FINE_GRID` a side) whose corners all overturn but some after an impact and some
+    without one (the two overturning modes, between which islands of survival lie: Zhang &
+    Makris 2001), until blocks are one cell wide;
     the cells of a block whose corners agree take their verdict (``inferred`` True, peak and
     impacts unknown). ``compute(cells, stored)`` simulates cells (reusing stored ones) and
     returns their rows; ``pulses`` are (shape, sign) pairs, ``axes`` the grid's A and W
@@ -87,12 +91,14 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
         for k, c in zip(need, cells):
             known[k] = by[cell_key(*c)]
 
+    by_mode = False
     if na < 2 or nw < 2:
         simulate([(p, s, i, j) for p, s in pulses for i in range(na)
                   for j in range(nw)])
         blocks: list[tuple] = []
     else:
         stride = coarse_stride(na, nw)
+        by_mode = stride == COARSE_STRIDE_FINE        # see :data:`NEAR_CRITICAL`
         ia = sorted(set(range(0, na, stride)) | {na - 1})
         iw = sorted(set(range(0, nw, stride)) | {nw - 1})
         blocks = [(p, s, a0, a1, w0, w1) for p, s in pulses
@@ -109,7 +115,8 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
             near = any(not bool(c.overturned) and c.max_abs_phi_over_alpha >= NEAR_CRITICAL
                        * crit for c in cs if ok)
             # overturning after an impact and without one: an island of survival lies between
-            modes = {_impacted(c) for c in cs} if ok and over == {True} else set()
+            modes = ({_impacted(c) for c in cs} if by_mode and ok and over == {True}
+                     else set())
             if ok and len(over) == 1 and not near and len(modes) <= 1:
                 v = over.pop()
                 for a in range(a0, a1 + 1):
