@@ -21,8 +21,9 @@ __all__ = ["COARSE_STRIDE", "COARSE_STRIDE_FINE", "FINE_GRID", "NEAR_CRITICAL", 
 COARSE_STRIDE = 4
 #: ... and every COARSE_STRIDE_FINE-th on a grid of at least FINE_GRID points along both axes
 #: (the paper's 100 x 100): measured on the analytic maps of the paper's five frames at
-#: 100 x 100 x 4 (docs/maps.md), it simulates 4-12 % of the cells instead of 9-16 % and
-#: reproduces 99.88-100 % of the full grid's verdicts (99.94-100 % with stride 4).
+#: 100 x 100 x 4 (docs/maps.md), without the mode rule below it simulated 4-12 % of the cells
+#: instead of 9-16 % and reproduced 99.88-100 % of the full grid's verdicts (99.94-100 % with
+#: stride 4); with it 4-15 % and 99.93-100 %.
 COARSE_STRIDE_FINE = 8
 FINE_GRID = 96
 
@@ -58,8 +59,8 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
     returns their rows; ``pulses`` are (shape, sign) pairs, ``axes`` the grid's A and W
     values, ``stored`` (store folder, its rows) or None. Measured on the analytic maps of the
     paper's frames: at 24 x 24 x 4 it simulates 16-31 % of the cells and reproduces
-    99.91-100 % of the full grid's verdicts; at 100 x 100 x 4 (stride 8) 4-12 % and
-    99.88-100 % (``docs/maps.md``)."""
+    99.91-100 % of the full grid's verdicts; at 100 x 100 x 4 (stride 8, mode rule) 4-15 %
+    and 99.93-100 % (``docs/maps.md``)."""
     from ..runner import info
 
     As, Ws = axes
