@@ -270,8 +270,8 @@ def test_map_figure_and_overlay(tmp_path, capsys):
 def test_adaptive_map_reproduces_the_full_grid_simulating_a_third(tmp_path, capsys):
     """Issue 27: at 24 x 24 x 4 the adaptive map simulates at most a third of the cells and
     gives >= 99.5 % of the full grid's verdicts; its store holds every cell, the inferred ones
-    marked; a rerun simulates nothing; a full run on its store simulates exactly the inferred
-    cells and gives the full map."""
+    marked; a rerun simulates and writes nothing; a full run on its store simulates exactly the
+    inferred cells and gives the full map."""
     import json
 
     from rockbench.cli.main import main
@@ -290,9 +290,11 @@ def test_adaptive_map_reproduces_the_full_grid_simulating_a_third(tmp_path, caps
     assert len(stored) == len(ad) and int(stored["inferred"].sum()) == ad.attrs["inferred"]
     args = ["map", "paper-asymmetric", "--grid", "24x24", "--store", str(store), "--adaptive",
             "--json"]
+    parts = sorted(store.glob("part-*.parquet"))
     assert main(args) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["cells"] == 2304 and out["cells_run"] == 0
+    assert sorted(store.glob("part-*.parquet")) == parts     # a rerun rewrites nothing
     assert out["reused"] == 2304 - ad.attrs["inferred"]
     again = run_map("paper-asymmetric", store=store, **kw)
     assert again.attrs["cells_run"] == ad.attrs["inferred"] and "inferred" not in again

@@ -161,8 +161,12 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
     if guessed:
         inf = tidy_map(pd.DataFrame(guessed))
         if path is not None:
-            write_part(path, inf)
-            compact_map_store(path)
+            # the store already holding every one of these verdicts (a rerun) is left as it is
+            had = _stored_inferred(stored[1]) if stored is not None else {}
+            if any(had.get(cell_key(g["pulse"], g["sign"], g["amplitude"], g["frequency"]))
+                   is not g["overturned"] for g in guessed):
+                write_part(path, inf)
+                compact_map_store(path)
         out = pd.concat([sim, inf], ignore_index=True)
     out = out.sort_values(["pulse", "sign", "frequency", "amplitude"],
                           ascending=[True, False, True, True]).reset_index(drop=True)
@@ -170,6 +174,16 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
                      method=frames[0].attrs.get("method", "") if frames else "",
                      reused=reused, cells_run=run, inferred=len(guessed))
     return out
+
+
+def _stored_inferred(df: pd.DataFrame) -> dict[tuple, bool]:
+    """The inferred cells of a store's rows: cell key -> verdict."""
+    if not len(df) or "inferred" not in df.columns:
+        return {}
+    inf = df[df["inferred"].astype("boolean").fillna(False).astype(bool)]
+    return {cell_key(p, s, a, w): bool(o) for p, s, a, w, o in
+            zip(inf["pulse"], inf["sign"], inf["amplitude"], inf["frequency"],
+                inf["overturned"])}
 
 
 def _impacted(c) -> bool:
