@@ -205,8 +205,12 @@ def _tabulate(row: np.ndarray, dyn, s: int, fall: float) -> None:
             vals[5, j] = t.damping / c if c > 0.0 else 0.0
         base = _TAB0 + i * 6 * (d + 1)
         for f in range(6):
-            cheb = C.chebfit(nodes, vals[f], d)
-            row[base + f * (d + 1): base + (f + 1) * (d + 1)] = C.cheb2poly(cheb)[::-1]
+            # cheb2poly drops trailing zero coefficients (a term that is zero throughout, or a
+            # top coefficient the CPU's least squares returns as exactly 0): pad to degree d
+            power = np.zeros(d + 1)
+            p = C.cheb2poly(C.chebfit(nodes, vals[f], d))
+            power[: len(p)] = p
+            row[base + f * (d + 1): base + (f + 1) * (d + 1)] = power[::-1]
     row[0] = 3.0
     row[44], row[45], row[46], row[47], row[48], row[49] = s, lo, hi, du, n, d
     row[43] = 1.0 / du
