@@ -34,6 +34,7 @@ from pathlib import Path
 import pytest
 
 import rockbench as rb
+from rockbench.testing import needs_engine
 from rockbench.engines import REGISTRY
 
 PACKAGE = Path(rb.__file__).resolve().parent
@@ -217,7 +218,7 @@ def test_no_overstuffed_rooms():
 
 
 # -----------------------------------------------------------------------------------------
-@pytest.mark.skipif("pymunk" not in rb.available_backends(), reason="pymunk not installed")
+@needs_engine("pymunk")
 def test_an_engine_run_builds_one_reference_once(monkeypatch):
     from rockbench.analytic import reference
 

@@ -12,13 +12,13 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
+from rockbench.testing import needs_engine
 from rockbench.cli.main import main
 from rockbench.result import HISTORY_COLUMNS
 
 RECORDS = Path(__file__).resolve().parents[2] / "shared" / "records"
 EL_CENTRO = RECORDS / "IV1940_ElCentro_180.AT2"
-needs_pymunk = pytest.mark.skipif("pymunk" not in rb.available_backends(),
-                                  reason="pymunk (an optional engine) is not installed")
+needs_pymunk = needs_engine("pymunk")
 
 INFO_KEYS = {"alpha", "p", "eta_ccw", "eta_cw", "lambda_ccw", "lambda_cw", "phi_cr_ccw",
              "phi_cr_cw"}

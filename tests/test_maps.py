@@ -11,11 +11,13 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
+from rockbench.engines import get_backend
+from rockbench.testing import engine_params
 from rockbench.studies.maps import MAP_COLUMNS, load_map, map_agreement, map_cells, run_map
 
 GRID = dict(grid=(10, 10), amplitude="1.5:8", frequency="4:10", pulses="symmetric+", tail=0.5)
-ENGINES = [e for e in rb.available_backends() if e != "analytic"]
-FAST = {"pymunk", "mujoco"}
+ENGINES = engine_params()          # every registered engine; those missing here skip, saying why
+FAST = {n for n in rb.backend_names() if get_backend(n).fast}
 
 
 def test_cells_are_inclusive_and_complete():
@@ -63,8 +65,8 @@ def test_compiled_and_reference_maps_agree(analytic_map):
                        atol=1e-4)
 
 
-@pytest.mark.parametrize("engine", [pytest.param(e, marks=() if e in FAST else
-                                                 pytest.mark.slow) for e in ENGINES])
+@pytest.mark.parametrize("engine", [pytest.param(*p.values, marks=[*p.marks, *(
+    () if p.values[0] in FAST else (pytest.mark.slow,))], id=p.id) for p in ENGINES])
 def test_every_backend_maps_10x10(engine, analytic_map, tmp_path):
     ref, _ = analytic_map
     df = run_map("paper-asymmetric", engine, store=tmp_path / "e.parquet", progress=False,

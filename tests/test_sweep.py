@@ -19,7 +19,7 @@ from rockbench.engines.analytic import AnalyticBackend
 from rockbench.sweep import (TIMING_COLUMNS, case_id, load_store, normalize_case, overturn_map,
                              pulse_grid, run_cases)
 
-ENGINES = ["analytic"] + (["pymunk"] if "pymunk" in available_backends() else [])
+ENGINES = ["analytic"] + (["pymunk"] if "pymunk" in available_backends() else [])   # data, not a parametrization
 BAD = {"scene": "no-such-scene", "engine": "analytic", "motion": None, "phi0": 0.1}
 
 

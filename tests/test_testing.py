@@ -12,6 +12,7 @@ import pytest
 
 import rockbench as rb
 from rockbench.engines import available_backends
+from rockbench.testing import engine_params
 from rockbench.engines.analytic import AnalyticBackend
 from rockbench.testing import assert_agree, check_backend
 
@@ -131,7 +132,7 @@ def test_bad_tolerances_raise_parameter_error(ref):
 
 
 # --- check_backend ---------------------------------------------------------------------------
-@pytest.mark.parametrize("name", available_backends())
+@pytest.mark.parametrize("name", engine_params(analytic=True))
 def test_shipped_backends_pass_the_contract(name):
     """Every available backend, the analytic reference included, honours the contract."""
     report = check_backend(name)
@@ -212,13 +213,20 @@ def test_check_backend_rejects_unknown_names():
 
 
 # --- the pytest plugin -----------------------------------------------------------------------
-def test_plugin_parametrizes_over_the_available_engines(pytester):
+REGISTERED = [n for n in rb.backend_names() if n != "analytic"]
+
+
+def test_plugin_parametrizes_over_the_registered_engines(pytester):
     example = (ROOT / "tests" / "user_example" / "test_my_scene.py").read_text()
     pytester.makepyfile(test_plugin_example=example)
     res = pytester.runpytest_inprocess("--collect-only", "-q", "-p", "no:cacheprovider",
                                        "-p", "no:hypothesispytest", "-p", "no:xdist")
     ids = [ln.split("[")[1].rstrip("]") for ln in res.outlines if "::" in ln]
-    assert ids == ENGINES
+    assert ids == REGISTERED
+
+
+def _ids(params):
+    return [p.id for p in params]
 
 
 def test_plugin_option_restricts_the_engines():
@@ -232,10 +240,75 @@ def test_plugin_option_restricts_the_engines():
             assert name == "--rockbench-engines"
             return self.value
 
-    assert plugin._engines(Config(None)) == ENGINES
-    assert plugin._engines(Config(",".join(reversed(ENGINES)))) == ENGINES[::-1]
+    assert _ids(plugin._engines(Config(None))) == REGISTERED
+    assert _ids(plugin._engines(Config(",".join(reversed(REGISTERED))))) == REGISTERED[::-1]
     with pytest.raises(pytest.UsageError, match="nope"):
         plugin._engines(Config("pymunk,nope"))
+
+
+@pytest.fixture
+def missing_engine(monkeypatch):
+    """pymunk made unavailable for this test (its once-per-process answer replaced)."""
+    from rockbench.engines import base, get_backend
+
+    cls = get_backend("pymunk")
+    monkeypatch.setitem(base._STATUS, cls, (False, "pymunk does not import: planted"))
+    monkeypatch.delenv("ROCKBENCH_REQUIRE_ENGINES", raising=False)
+    return "pymunk"
+
+
+def test_a_missing_engine_is_a_skipped_test_with_the_reason_and_remedy(missing_engine):
+    (p,) = engine_params(names=[missing_engine])
+    (mark,) = p.marks
+    assert mark.name == "skip"
+    assert "planted" in mark.kwargs["reason"] and "pip install 'rockbench[pymunk]'" in \
+        mark.kwargs["reason"]
+    assert missing_engine not in rb.available_backends()
+    assert any(line.startswith("pymunk: ") for line in rb.engines.unavailable_lines())
+
+
+def test_a_required_engine_that_is_missing_is_an_error(missing_engine, monkeypatch, capsys):
+    from rockbench.cli.main import main
+    from rockbench.errors import BackendUnavailable
+
+    monkeypatch.setenv("ROCKBENCH_REQUIRE_ENGINES", "pymunk,mujoco")
+    with pytest.raises(pytest.UsageError, match="requires it: pymunk cannot run here: .*planted"):
+        engine_params()
+    with pytest.raises(BackendUnavailable, match="pymunk: pymunk does not import: planted"):
+        rb.available_backends()
+    assert main(["report", "--quick", "--out", "/nonexistent/never-written"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "ROCKBENCH_REQUIRE_ENGINES" in err[0] and "pymunk" in err[0]
+    monkeypatch.setenv("ROCKBENCH_REQUIRE_ENGINES", "pymunk,nope")
+    with pytest.raises(rb.ParameterError, match="ROCKBENCH_REQUIRE_ENGINES"):
+        rb.available_backends()
+
+
+def test_availability_is_decided_once_per_process_and_an_interrupt_decides_nothing(monkeypatch):
+    from rockbench.engines import base
+    from rockbench.engines.analytic import AnalyticBackend
+
+    calls = []
+
+    class Probed(AnalyticBackend):
+        name = "probed"
+
+        @classmethod
+        def _probe(cls):
+            calls.append(1)
+            if len(calls) == 1:
+                raise KeyboardInterrupt
+            if len(calls) == 2:
+                raise RuntimeError("first answer")
+            return True, "later answer"
+
+    monkeypatch.setattr(base, "_STATUS", {})
+    with pytest.raises(KeyboardInterrupt):
+        Probed.available()
+    assert Probed.available() == (False, "RuntimeError: first answer")
+    for _ in range(5):                     # decided: the probe is not asked again
+        assert Probed.available() == (False, "RuntimeError: first answer")
+    assert len(calls) == 2
 
 
 def test_user_example_is_the_one_in_the_docs():

@@ -13,7 +13,7 @@ tradeoff`` (``docs/choosing.md``). Results are kept in the campaign's store.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
@@ -30,13 +30,16 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                full: bool = False, workers: int | None = None,
                progress: bool = False, scene: Any = None, dts: Sequence[float] | None = None,
                stress_scene: Any = None, stress_hybrid: Any = None,
-               evidence: str = "quick") -> dict[str, Any]:
+               evidence: str = "quick",
+               absent: Sequence[Mapping[str, str]] = ()) -> dict[str, Any]:
     """{"tradeoff": table, "advice": frame, "stress": table or None, "breaks": the first
     breaking point of each engine along each axis (:func:`rockbench.studies.robustness.breaking_points`)
     or None, "words": [str]}: the
     stability sweep runs in its fast form (``full``: the full form; ``quick``: none).
     ``evidence``: the validation set the advice is chosen and confirmed on (a plan's
-    ``choice_evidence``); ``full`` takes the next larger one, ``quick`` the quick one."""
+    ``choice_evidence``); ``full`` takes the next larger one, ``quick`` the quick one.
+    ``absent``: the registered engines that did not run (:func:`rockbench.engines.
+    engine_states` rows: name, state, detail), listed in the advice with their state."""
     from ..studies.advise import advice_for_report
     from ..scene.scene import load_scene
     from ..studies.robustness import AXES, axis_label, base_values, breaking_points, stress
@@ -58,7 +61,9 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     t = tradeoff(scene, names, dts=dts, repeat=1, cases=cases,
                  self_consistency="none", workers=workers, store=store / "tradeoff",
                  progress=progress)
-    advice = advice_for_report(t.table)
+    gone = {r["name"]: (r["state"], r["detail"]) for r in absent}
+    gone.update({n: ("not installed", why) for n, why in t.unavailable.items()})
+    advice = advice_for_report(t.table, absent=gone)
     sw = None if quick else stress(names, full=full, workers=workers, progress=progress,
                                    scene=stress_scene, hybrid=stress_hybrid)
     st = None if sw is None else sw.table

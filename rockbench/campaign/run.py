@@ -329,20 +329,23 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     plan : a plan file (``kind = "campaign-plan"``, :func:`rockbench.campaign.plan.load_plan`)
         or a plan mapping; overrides ``scenes``.
     """
-    from ..engines import available_backends
+    from ..engines import check_required, engine_states
 
     t_start = time.perf_counter()
     check_options(executor, workers, dask_address)
-    names = resolve_engines(engines) if engines is not None else available_backends()
-    names = [REFERENCE] + [n for n in names if n != REFERENCE]
+    check_required()              # ROCKBENCH_REQUIRE_ENGINES: a missing engine is an error
+    # every registered engine has a state, decided once: ran, not installed (why, remedy),
+    # left out by --engine; the page, the decision and the command's last lines show it
+    states = engine_states(resolve_engines(engines) if engines is not None else None)
+    names = [REFERENCE] + [r["name"] for r in states
+                           if r["state"] == "ran" and r["name"] != REFERENCE]
+    absent = [r for r in states if r["state"] != "ran" and r["name"] != REFERENCE]
+    missing = [r["name"] for r in absent if r["state"] == "not installed"]
     fragility_records = records_dir      # None: the fragility section's own ensemble (issue 26)
     if records_dir is None and not quick:
         records_dir = bundled_dir()       # the public-domain records shipped in the package
     if records_dir is not None:
         find_records(records_dir)          # a bad folder fails now, not after the pulses
-    avail = set(available_backends())
-    missing = [n for n in names if n not in avail]
-    names = [n for n in names if n in avail]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if isinstance(plan, Mapping):
@@ -440,7 +443,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                         progress=progress, scene=plan["choice_scene"], dts=plan["choice_dts"],
                         stress_scene=plan.get("stress_scene"),
                         stress_hybrid=plan.get("stress_hybrid_scene"),
-                        evidence=plan.get("choice_evidence", "quick"))
+                        evidence=plan.get("choice_evidence", "quick"), absent=absent)
     timings["choice"] = time.perf_counter() - t
 
     # 5: records ----------------------------------------------------------------------------
@@ -507,7 +510,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                                engines_tab, speed, omap, records, lines, notes, out / "figures",
                                quick=quick, records_dir=records_dir, store_dir=store_dir,
                                fingerprint=fingerprint, engine_versions=_engine_versions(),
-                               files=list(files))
+                               files=list(files), engine_states=states)
     from ..report.choice_page import choice_html, work_precision_html
     from ..report.decision import decision_html, evidence_note
     from ..report.maps_page import maps_html

@@ -426,6 +426,18 @@ def engine_names(args: argparse.Namespace, option: str = "--engine") -> list[str
     return resolve_engines(names, name=option)
 
 
+def absent_engine_lines(args: argparse.Namespace) -> list[str]:
+    """One line per engine a command's selection (``--engine``, or every registered engine)
+    could not use here: its name, why, and the remedy."""
+    from ..engines import unavailable_lines
+
+    try:
+        chosen = engine_names(args)
+    except RockbenchError:
+        return []
+    return [f"not run: {line}" for line in unavailable_lines(chosen)]
+
+
 # ==========================================================================================
 # Output
 # ==========================================================================================

@@ -52,7 +52,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .common import (CommandLineError, Parser, add_engine_option, add_motion_options,
+from .common import (CommandLineError, Parser, absent_engine_lines, add_engine_option, add_motion_options,
                      add_quiet_option, add_run_options, add_scene_options, add_setting_option,
                      arg_count, arg_key_value, arg_names, arg_nonzero, arg_number, arg_positive,
                      arg_sign, backend_overrides, engine_names, engine_settings, load_scene_from,
@@ -63,6 +63,10 @@ from ..errors import ParameterError, RockbenchError
 __all__ = ["build_parser", "main"]
 
 PROG = "rockbench"
+
+#: Commands that run several engines (by default every registered one): each ends by naming
+#: the engines of its selection that could not run here, why, and the remedy.
+ENGINE_COMMANDS = ("report", "compare", "tradeoff", "advise", "stress", "fragility")
 
 #: Summary rows of ``rockbench compare`` (the full table goes to --csv / --json).
 COMPARE_COLUMNS = ("backend", "status", "max_abs_phi_over_alpha", "peak_rel_error", "nrmse",
@@ -519,7 +523,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     configure(quiet=bool(getattr(args, "quiet", False)))
     try:
-        return COMMANDS[args.command](args)
+        rc = COMMANDS[args.command](args)
+        if args.command in ENGINE_COMMANDS:     # every engine it could not use, one line each
+            for line in absent_engine_lines(args):
+                print(f"{PROG}: {line}", file=sys.stderr)
+        return rc
     except RockbenchError as e:
         print(f"{PROG}: error: {_one_line(e)}", file=sys.stderr)
         return 2

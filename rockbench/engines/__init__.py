@@ -10,6 +10,7 @@ import every engine - a store's fingerprint, a map's inputs - asks :func:`engine
 from __future__ import annotations
 
 import importlib
+import os
 from collections.abc import Iterable
 from typing import Any
 
@@ -25,8 +26,14 @@ REGISTRY: dict[str, str] = {
     "drake": "rockbench.engines.drake:DrakeBackend",
 }
 
-__all__ = ["REGISTRY", "get_backend", "backend_names", "available_backends", "engine_info",
-           "engine_versions"]
+__all__ = ["REGISTRY", "REQUIRE_ENV", "get_backend", "backend_names", "available_backends",
+           "engine_info", "engine_versions", "engine_states", "required_engines",
+           "check_required", "unavailable_lines", "ENGINE_STATES"]
+
+#: Environment variable naming engines that must be available (comma-separated names, or
+#: "all"): where one of them is not, :func:`available_backends` and :func:`check_required`
+#: raise instead of leaving it out (CI sets it, so a missing engine turns CI red).
+REQUIRE_ENV = "ROCKBENCH_REQUIRE_ENGINES"
 
 
 def backend_names() -> list[str]:
@@ -46,16 +53,30 @@ def get_backend(name: str):
     return getattr(module, cls)
 
 
+def _status(name: str) -> tuple[bool, str, str]:
+    """(available, version or reason, remedy) of a registered backend; the probe runs once
+    per process (:meth:`rockbench.engines.base.Backend.available`)."""
+    try:
+        cls = get_backend(name)
+    except BackendUnavailable as e:
+        return False, str(e), f"pip install 'rockbench[{name}]'"
+    ok, info = cls.available()
+    return ok, info, "" if ok else cls.remedy(info)
+
+
 def engine_info(names: Iterable[str] | None = None) -> list[dict[str, Any]]:
     """One row per backend of ``names`` (default: every registered one, which imports every
-    engine): name, whether it imports, engine version or reason."""
+    engine): name, whether it imports, and its engine version or the reason and the remedy.
+    Each engine's answer is decided once per process."""
     rows = []
     for name in REGISTRY if names is None else names:
-        try:
-            ok, info = get_backend(name).available()
-        except BackendUnavailable as e:
-            ok, info = False, str(e)
-        rows.append({"name": name, "available": ok, "version" if ok else "reason": info})
+        ok, info, remedy = _status(name)
+        row: dict[str, Any] = {"name": name, "available": ok}
+        if ok:
+            row["version"] = info
+        else:
+            row.update(reason=info, remedy=remedy)
+        rows.append(row)
     return rows
 
 
@@ -77,6 +98,67 @@ def engine_versions() -> dict[str, str | None]:
     return out
 
 
+def required_engines() -> list[str]:
+    """The engines :data:`REQUIRE_ENV` names (empty when it is unset): "all" is every
+    registered backend. An unknown name is an error naming the variable."""
+    text = os.environ.get(REQUIRE_ENV, "").strip()
+    if not text:
+        return []
+    if text.lower() == "all":
+        return list(REGISTRY)
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    for n in names:
+        if n not in REGISTRY:
+            raise ParameterError(REQUIRE_ENV, text,
+                                 f"'all' or comma-separated names among {', '.join(REGISTRY)}")
+    return names
+
+
+def unavailable_lines(names: Iterable[str] | None = None) -> list[str]:
+    """One line per backend of ``names`` (default: every registered one) that cannot run
+    here: its name, why, and the remedy."""
+    return [f"{r['name']}: {r['reason']}; remedy: {r['remedy']}"
+            for r in engine_info(names) if not r["available"]]
+
+
+def check_required() -> None:
+    """Raise :class:`~rockbench.errors.BackendUnavailable` naming every engine that
+    :data:`REQUIRE_ENV` requires and that cannot run here (with why and the remedy)."""
+    req = required_engines()
+    lines = unavailable_lines(req) if req else []
+    if lines:
+        raise BackendUnavailable(f"{REQUIRE_ENV} requires engines that cannot run here: "
+                                 + " | ".join(lines))
+
+
 def available_backends() -> list[str]:
-    """Names of the backends that can run on this machine (imports every engine)."""
+    """Names of the backends that can run on this machine (imports every engine; decided once
+    per process). Raises when an engine that :data:`REQUIRE_ENV` requires is missing."""
+    check_required()
     return [r["name"] for r in engine_info() if r["available"]]
+
+
+#: The state of a registered engine in a run or report (:func:`engine_states`).
+ENGINE_STATES = {
+    "ran": "selected and available: it ran",
+    "not installed": "its engine does not import here (the reason and the remedy say why)",
+    "left out": "available, but not selected (--engine)",
+}
+
+
+def engine_states(selected: Iterable[str] | None = None) -> list[dict[str, Any]]:
+    """Every registered backend with its state for a run of ``selected`` (None: every
+    available one): ``name``, ``state`` (a key of :data:`ENGINE_STATES`), ``detail`` (the
+    version; or why it is not installed and the remedy; or the option that left it out)."""
+    chosen = None if selected is None else set(selected)
+    out = []
+    for r in engine_info():
+        if not r["available"]:
+            out.append({"name": r["name"], "state": "not installed",
+                        "detail": f"{r['reason']}; remedy: {r['remedy']}"})
+        elif chosen is not None and r["name"] not in chosen:
+            out.append({"name": r["name"], "state": "left out",
+                        "detail": "not selected (--engine)"})
+        else:
+            out.append({"name": r["name"], "state": "ran", "detail": r["version"]})
+    return out

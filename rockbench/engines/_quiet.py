@@ -79,8 +79,11 @@ def quiet_import(name: str, *, at_exit: bool = False) -> ModuleType:
     first import; ``at_exit``: the module also writes to descriptor 2 at interpreter exit
     (OpenSeesPy), so drop the C library's writes to it then (:func:`_drop_c_stderr_at_exit`).
     Import errors propagate unchanged."""
-    module = sys.modules.get(name)
-    if module is None:
+    if name in sys.modules:
+        # import_module, not sys.modules[name]: a module another thread is still importing
+        # is in sys.modules half-initialised; import_module waits for it
+        module = importlib.import_module(name)
+    else:
         with silenced():
             module = importlib.import_module(name)
     if at_exit:

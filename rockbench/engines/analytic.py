@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-import time
 from typing import ClassVar
 
 import scipy
 
 from ..analytic.reference import reference_of
 from ..analytic.solver import AnalyticSettings, simulate
+from .._jit import CpuClock
 from ..constants import FALL_EXTENSION
 from ..result import Result
 from .base import Backend, run_window
@@ -25,7 +25,7 @@ class AnalyticBackend(Backend):
     Settings: ClassVar[type] = AnalyticSettings
 
     @classmethod
-    def available(cls) -> tuple[bool, str]:
+    def _probe(cls) -> tuple[bool, str]:
         return True, f"scipy {scipy.__version__}"
 
     def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
@@ -36,22 +36,22 @@ class AnalyticBackend(Backend):
         longer run is returned (its history ends at the fall, after ``duration``), so that the
         reference and the engines' collapse rule give one verdict (``docs/conventions.md``)."""
         t0, t_end = run_window(self.scene, motion, duration, phi0, settings=self.settings)
-        cpu = time.process_time()
-        if _compiled_path(self.settings.method, motion):   # the numba path (maps, records)
-            from ..analytic.compiled import simulate_compiled as integrate
-        else:                                              # the solve_ivp reference
-            integrate = simulate
-        ref = reference_of(self.scene)
-        result = integrate(self.scene, motion, duration=t_end - t0, phi0=phi0,
-                           settings=self.settings, reference=ref)
-        if _fall_under_way(result, ref, motion, t_end):
-            # the run ended after the ground motion past the critical angle: the fall is
-            # finished (one verdict rule for every backend, docs/conventions.md)
-            longer = integrate(self.scene, motion, duration=t_end - t0 + FALL_EXTENSION,
-                               phi0=phi0, settings=self.settings, reference=ref)
-            if longer.summary.overturned:
-                result = longer
-        result.cost.cpu_s = time.process_time() - cpu
+        with CpuClock() as clock:
+            if _compiled_path(self.settings.method, motion):   # the numba path (maps, records)
+                from ..analytic.compiled import simulate_compiled as integrate
+            else:                                              # the solve_ivp reference
+                integrate = simulate
+            ref = reference_of(self.scene)
+            result = integrate(self.scene, motion, duration=t_end - t0, phi0=phi0,
+                               settings=self.settings, reference=ref)
+            if _fall_under_way(result, ref, motion, t_end):
+                # the run ended after the ground motion past the critical angle: the fall is
+                # finished (one verdict rule for every backend, docs/conventions.md)
+                longer = integrate(self.scene, motion, duration=t_end - t0 + FALL_EXTENSION,
+                                   phi0=phi0, settings=self.settings, reference=ref)
+                if longer.summary.overturned:
+                    result = longer
+        result.cost.cpu_s, result.cost.compile_cpu_s = clock.cpu_s, clock.compile_s
         return result
 
 

@@ -26,8 +26,12 @@ A backend is a subclass of :class:`Backend` registered by name in :mod:`rockbenc
     order in which campaigns schedule jobs (longest first); from the ``total_s`` column of
     ``benchmarks/results/results.md``;
 
-* ``available()`` - classmethod returning ``(True, version)`` or ``(False, why)`` without
-  raising when the engine package is missing;
+* ``_probe()`` - classmethod returning ``(True, version)`` or ``(False, why)``: whether the
+  engine imports here (it may raise: an exception is a ``(False, why)``). Callers never call it:
+  they ask ``available()``, which the base class implements once and which runs the probe
+  **once per process** (a cached fact: every table and report of one process sees the same
+  engines), and ``remedy(why)`` (default: ``pip install 'rockbench[<name>]'``; an adapter whose
+  engine needs a system library says which);
 * ``run(motion=None, *, duration=None, phi0=0.0) -> Result`` - one simulation of the scene it
   was constructed with, returning a :class:`rockbench.result.Result` whose ``history`` has every
   column of :data:`~rockbench.result.HISTORY_COLUMNS` (and, for engines,
@@ -81,7 +85,7 @@ events and the effective eta from the sampled history.
 from __future__ import annotations
 
 import abc
-import time
+import threading
 from dataclasses import asdict, dataclass, fields
 from typing import Any, ClassVar
 
@@ -94,6 +98,10 @@ from .bodies import body_specs, foundation_spec, initial_poses
 from .devices import DeviceGeometry, PointForce
 
 __all__ = ["Backend", "EngineBackend", "EngineSettings", "run_window"]
+
+#: Backend class -> (available, version or reason): each probe runs once per process.
+_STATUS: dict[type, tuple[bool, str]] = {}
+_STATUS_LOCK = threading.RLock()
 
 
 class Backend(abc.ABC):
@@ -121,8 +129,31 @@ class Backend(abc.ABC):
 
     @classmethod
     @abc.abstractmethod
+    def _probe(cls) -> tuple[bool, str]:
+        """(True, engine version) if the engine imports here, else (False, reason); may
+        raise (then unavailable, the exception is the reason). Called once per process by
+        :meth:`available`."""
+
+    @classmethod
     def available(cls) -> tuple[bool, str]:
-        """(True, engine version) if the backend can run here, else (False, reason)."""
+        """(True, engine version) if the backend can run here, else (False, reason): the
+        adapter's :meth:`_probe`, run once per process and kept (an engine never appears in
+        one table and vanishes from the next). An interrupt (Ctrl-C) propagates and decides
+        nothing."""
+        with _STATUS_LOCK:
+            got = _STATUS.get(cls)
+            if got is None:
+                try:
+                    ok, info = cls._probe()
+                except Exception as e:  # noqa: BLE001 - any failure to import is the reason
+                    ok, info = False, f"{type(e).__name__}: {e}"
+                got = _STATUS[cls] = (bool(ok), str(info))
+        return got
+
+    @classmethod
+    def remedy(cls, reason: str = "") -> str:
+        """What makes the backend available when :meth:`available` says why it is not."""
+        return f"pip install 'rockbench[{cls.name}]'"
 
     @abc.abstractmethod
     def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
@@ -329,10 +360,12 @@ class EngineBackend(Backend):
         self.specs = body_specs(self.scene)
         self.foundation = foundation_spec(self.scene)
         self.poses0 = initial_poses(self.scene, phi0)
-        cpu = time.process_time()
-        stepped = step_run(self, motion, t0, t_end, phi0)
-        result = finish(self.scene, motion, self.settings, self.specs, stepped, phi0=phi0,
-                        t0=t0, backend_name=self.name, engine_version=self.version(),
-                        devices=device_geometry(self), keep=keep)
-        result.cost.cpu_s = time.process_time() - cpu
+        from .._jit import CpuClock
+
+        with CpuClock() as clock:
+            stepped = step_run(self, motion, t0, t_end, phi0)
+            result = finish(self.scene, motion, self.settings, self.specs, stepped, phi0=phi0,
+                            t0=t0, backend_name=self.name, engine_version=self.version(),
+                            devices=device_geometry(self), keep=keep)
+        result.cost.cpu_s, result.cost.compile_cpu_s = clock.cpu_s, clock.compile_s
         return result

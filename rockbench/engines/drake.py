@@ -149,7 +149,7 @@ class DrakeBackend(EngineBackend):
     )
 
     @classmethod
-    def available(cls) -> tuple[bool, str]:
+    def _probe(cls) -> tuple[bool, str]:
         try:
             import pydrake  # noqa: F401
             from pydrake.multibody.cenic import CenicIntegrator  # noqa: F401

@@ -225,7 +225,7 @@ class MujocoBackend(EngineBackend):
         return self.settings.devices == "native"
 
     @classmethod
-    def available(cls) -> tuple[bool, str]:
+    def _probe(cls) -> tuple[bool, str]:
         try:
             import mujoco
         except Exception as e:  # pragma: no cover - depends on the machine

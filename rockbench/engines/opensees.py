@@ -179,6 +179,15 @@ class OpenseesSettings(EngineSettings):
         check_choice("damper", self.damper, DAMPER_MODELS)
 
 
+def _import_cause(e: BaseException) -> str:
+    """The first cause of an import failure: openseespy replaces the loader's message
+    ("libblas.so.3: cannot open shared object file") by "Failed to import openseespy on
+    Linux", keeping the original as the exception's context."""
+    while e.__cause__ is not None or e.__context__ is not None:
+        e = e.__cause__ or e.__context__
+    return f"{type(e).__name__}: {e}"
+
+
 class NoConvergence(RuntimeError):
     """An OpenSees increment did not converge after every allowed halving of the step."""
 
@@ -197,15 +206,21 @@ class OpenseesBackend(EngineBackend):
         return self.settings.devices == "native"
 
     @classmethod
-    def available(cls) -> tuple[bool, str]:
+    def _probe(cls) -> tuple[bool, str]:
         try:
             # its "Process 0 Terminating" at exit goes to /dev/null (engines/_quiet.py)
             ops = quiet_import("openseespy.opensees", at_exit=True)
             version = ops.version()
-        except BaseException as e:  # noqa: BLE001 - a missing libblas.so.3 raises RuntimeError
-            return False, (f"openseespy does not import ({type(e).__name__}: {e}); "
-                           f"its Linux wheel needs the system BLAS (apt-get install libblas3)")
+        except Exception as e:  # noqa: BLE001 - openseespy re-raises any import failure
+            return False, f"openseespy does not import: {_import_cause(e)}"
         return True, f"OpenSeesPy {version}"
+
+    @classmethod
+    def remedy(cls, reason: str = "") -> str:
+        if "libblas" in reason or "liblapack" in reason:
+            return ("install the system BLAS that OpenSeesPy's Linux wheel links: "
+                    "apt-get install libblas3 (Debian, Ubuntu) or dnf install blas (Fedora)")
+        return super().remedy(reason)
 
     # --- building ---------------------------------------------------------------------------
     def _build(self) -> None:

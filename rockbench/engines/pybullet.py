@@ -176,7 +176,7 @@ class PybulletBackend(EngineBackend):
     relative_cost: ClassVar[float] = 2.5
 
     @classmethod
-    def available(cls) -> tuple[bool, str]:
+    def _probe(cls) -> tuple[bool, str]:
         try:
             pybullet = quiet_import("pybullet")     # its build-time banner goes to /dev/null
         except Exception as e:  # pragma: no cover - depends on the machine

@@ -93,7 +93,7 @@ class PymunkBackend(EngineBackend):
     fast: ClassVar[bool] = True     # real-time factor 44-341 (benchmarks/results/results.md)
 
     @classmethod
-    def available(cls) -> tuple[bool, str]:
+    def _probe(cls) -> tuple[bool, str]:
         try:
             import pymunk
         except Exception as e:  # pragma: no cover - depends on the machine

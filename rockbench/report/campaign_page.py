@@ -122,9 +122,20 @@ def _details(summary: str, inner: str, *, open_: bool = False) -> str:
             f"</summary>{inner}</details>")
 
 
+def engines_state_html(states) -> str:
+    """Every registered engine with its state in this run (ran / not installed / left out)
+    and the detail (version; or why and the remedy; or the option), as a table."""
+    rows = pd.DataFrame([{"engine": r["name"], "state": r["state"], "detail": r["detail"]}
+                         for r in states])
+    if not len(rows):
+        return ""
+    return H.html_table(rows, ["engine", "state", "detail"])
+
+
 def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, engines_tab,
                   speed, omap, records, lines, notes, figdir, *, quick, records_dir, store_dir,
-                  fingerprint, engine_versions, files) -> dict[str, tuple[str, str]]:
+                  fingerprint, engine_versions, files, engine_states=()
+                  ) -> dict[str, tuple[str, str]]:
     """The sections (id -> (title, html)) of the campaign page that its tables and comparison
     payloads (each with a ``label``) make; figures are written under ``figdir``. The campaign
     adds its other parts' sections and :func:`ordered` puts them in place.
@@ -133,7 +144,8 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     backends that ran, ``missing``: those not available; ``lines``: the conclusion; ``notes``:
     skipped records and failed cases; ``fingerprint``: the store's code fingerprint;
     ``engine_versions``: backend name -> version (or why it is unavailable); ``files``: the
-    CSV files written."""
+    CSV files written; ``engine_states``: every registered backend's state in this run
+    (name, state, detail: ran, not installed with why and the remedy, left out by an option)."""
     units = {**METRIC_COLUMNS, **DERIVED_COLUMNS}
     names_of = plan.get("labels") or {}         # scene reference -> the scene's own name
 
@@ -298,7 +310,9 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
 
     # settings
     items = [("engines", ", ".join(names)),
-             ("engines not available", ", ".join(missing) or "none"),
+             ("engines that did not run", "; ".join(
+                 f"{r['name']} ({r['state']})" for r in engine_states
+                 if r["state"] != "ran") or "none"),
              ("scenes", ", ".join(map(str, plan["scenes"]))),
              ("pulse (A, W) points", ", ".join(f"({a:g}, {w:g})"
                                                for a, w in plan["pulse_points"])),
@@ -318,6 +332,7 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
             default_settings.setdefault(k, v)
     sett = (H._dl(items) + "<h3>Backend settings (defaults, all cases but the time-step sweep)"
             "</h3>" + H._dl((f"settings {k}", v) for k, v in default_settings.items())
+            + "<h3>Engines</h3>" + engines_state_html(engine_states)
             + "<h3>Versions</h3>" + H.versions_html(engine_versions))
     sections["settings-section"] = ("Settings and versions", sett)
     links = ", ".join(f'<a href="{f}">{f}</a>' for f in files)

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -183,8 +183,8 @@ def _variant(label: str, knob: str = "dt") -> str:
 
 
 def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | None = None,
-           unavailable: dict[str, str] | None = None, knobs: dict[str, str] | None = None
-           ) -> list[dict[str, Any]]:
+           unavailable: dict[str, str] | None = None, knobs: dict[str, str] | None = None,
+           absent: Mapping[str, tuple[str, str]] | None = None) -> list[dict[str, Any]]:
     """The ranking of :class:`Advice` from a tradeoff table (:data:`rockbench.studies.tradeoff.
     TABLE_COLUMNS`: at least engine, setting, dt, worst_error [, worst_error_choice,
     worst_error_heldout], cpu_per_sim_s, real_time_factor).
@@ -197,9 +197,14 @@ def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | No
     one gets its most informative failure: "fails held-out" (accepted, refused by the held-out
     part), "unconfirmed", "lucky steps only" or "cannot reach". ``engines``: the engines
     considered (default: those in the table); ``unavailable``: engine -> why it could not run;
-    ``knobs``: engine -> the name of its precision knob (default dt)."""
+    ``absent``: engine -> (state, detail) of registered engines that did not run (their rows
+    come last, with that state as the status); ``knobs``: engine -> the name of its precision
+    knob (default dt)."""
     tolerance = _check_tolerance(tolerance)
-    unavailable = dict(unavailable or {})
+    gone: dict[str, tuple[str, str]] = {n: ("unavailable", why)
+                                        for n, why in (unavailable or {}).items()}
+    gone.update(absent or {})
+    unavailable = {n: why for n, (_, why) in gone.items()}
     knobs = dict(knobs or {})
     names = list(dict.fromkeys(list(engines) if engines is not None else list(table["engine"])))
     for n in unavailable:
@@ -211,7 +216,8 @@ def decide(table: pd.DataFrame, tolerance: float, *, engines: Sequence[str] | No
     for n in names:
         g = table[table["engine"] == n]
         if n in unavailable or g.empty:
-            missing.append({"engine": n, "meets": False, "status": "unavailable",
+            missing.append({"engine": n, "meets": False,
+                            "status": gone.get(n, ("unavailable", ""))[0],
                             "setting": None, "dt": None, "worst_error": None,
                             "worst_error_choice": None, "worst_error_heldout": None,
                             "cpu_per_sim_s": None, "real_time_factor": None,
@@ -624,16 +630,18 @@ def advise(scene, tolerance: float, engines: Sequence[str] | None = None, store=
                   machine=machine_info(), contact=pd.DataFrame(contact_rows))
 
 
-def advice_for_report(table: pd.DataFrame, tolerances: Sequence[float] = (0.02, 0.002)
-                      ) -> pd.DataFrame:
+def advice_for_report(table: pd.DataFrame, tolerances: Sequence[float] = (0.02, 0.002), *,
+                      absent: Mapping[str, tuple[str, str]] | None = None) -> pd.DataFrame:
     """For the report: one row per (tolerance, engine) of :func:`decide` on a tradeoff table
     (columns tolerance [-], rank, engine, status, setting, dt [s], worst_error [-] (on the
     choice part), held_out_worst_error [-], cpu_per_sim_s [s/s, steady state],
     real_time_factor [-], erratic, reason): the recommendation is rank 1 of each tolerance when
-    its status is "meets"."""
+    its status is "meets". ``absent``: engine -> (state, detail) of the registered engines that
+    did not run ("not installed", "left out": :data:`rockbench.engines.ENGINE_STATES`), each a
+    row with that status and the detail as its reason."""
     rows = []
     for tol in tolerances:
-        for i, r in enumerate(decide(table, tol), 1):
+        for i, r in enumerate(decide(table, tol, absent=absent), 1):
             rows.append({"tolerance": float(tol), "rank": i,
                          **{k: r.get(k) for k in ("engine", "status", "setting", "dt")},
                          "worst_error": r.get("worst_error_choice"),

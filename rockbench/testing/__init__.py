@@ -6,7 +6,8 @@
 * :func:`check_backend` - does a backend adapter (a new or modified one) honour the contract of
   :mod:`rockbench.engines.base`? Like Gymnasium's environment checker.
 * a pytest plugin (installed with rockbench, :mod:`rockbench.testing.plugin`): the fixture
-  ``rockbench_backend`` is parametrized over the available engines, ``rockbench_reference``
+  ``rockbench_backend`` is parametrized over the registered engines (those that cannot run
+  here skipped with the reason; :func:`engine_params` for your own ``parametrize``), ``rockbench_reference``
   runs (and caches) the analytic reference. See ``docs/testing.md``.
 
 Modules: :mod:`~rockbench.testing.agree` (``assert_agree``), :mod:`~rockbench.testing.contract`
@@ -19,11 +20,13 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["assert_agree", "check_backend", "BackendReport", "Check"]
+__all__ = ["assert_agree", "check_backend", "BackendReport", "Check", "engine_params",
+           "needs_engine"]
 
 #: Public name -> the submodule that defines it.
 _HOME = {"assert_agree": "agree", "check_backend": "contract", "BackendReport": "contract",
-         "Check": "contract"}
+         "Check": "contract", "engine_params": "plugin",
+         "needs_engine": "plugin"}
 
 
 def __getattr__(name: str) -> Any:

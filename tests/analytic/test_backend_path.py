@@ -5,6 +5,7 @@ path for anything. Both agree on the well-conditioned quantities (docs/reproduci
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import rockbench as rb
@@ -45,8 +46,34 @@ def test_record_runs_compiled_by_default_and_solve_ivp_on_request(record):
     assert len(fast.history) == len(plain.history)
     dphi = (fast.history["phi"] - plain.history["phi"]).abs().max() / SCENE.alpha
     assert dphi <= 1e-6
-    # and the compiled path is the cheaper one (measured ~60 x on the whole record)
-    assert fast.cost.cpu_s < plain.cost.cpu_s
+    # no timing here (benchmarks/compiled_analytic.py measures the speed): only that the
+    # one-off loading or compiling of kernels is reported apart from the run's own cost
+    for r in (fast, plain):
+        assert r.cost.cpu_s > 0.0 and r.cost.compile_cpu_s >= 0.0
+    assert plain.cost.compile_cpu_s == 0.0       # solve_ivp compiles nothing
+
+
+@needs_numba
+def test_a_first_runs_compilation_is_reported_apart():
+    """A kernel compiled (or loaded from the cache) inside a run is ``compile_cpu_s``, not
+    ``cpu_s``: a clock around a freshly defined kernel sees its compilation, and a second call
+    sees none."""
+    from rockbench._jit import CpuClock, numba
+
+    @numba.njit
+    def kernel(x):
+        s = 0.0
+        for i in range(x.size):
+            s += x[i] * x[i]
+        return s
+
+    x = np.ones(10)
+    with CpuClock() as first:
+        kernel(x)
+    with CpuClock() as second:
+        kernel(x)
+    assert first.compile_s > 0.0 and second.compile_s == 0.0
+    assert first.cpu_s >= 0.0 and second.cpu_s >= 0.0
 
 
 def test_pulses_and_free_rocking_stay_on_solve_ivp():

@@ -298,7 +298,7 @@ class _Fake(EngineBackend):
     Settings = EngineSettings
 
     @classmethod
-    def available(cls):
+    def _probe(cls):
         return True, "fake 1.0"
 
     def _build(self):

@@ -56,3 +56,33 @@ def test_reading_a_capability_imports_no_engine():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_opensees_without_its_library_says_why_and_what_installs_it(monkeypatch):
+    """Without an importable openseespy (e.g. no libblas.so.3, openseespy's wheel re-raising
+    the loader's error as "Failed to import openseespy on Linux") the probe reports the first
+    cause, and the remedy names the system library."""
+    import sys
+
+    from rockbench.engines.opensees import OpenseesBackend
+
+    monkeypatch.setitem(sys.modules, "openseespy.opensees", None)
+    ok, why = OpenseesBackend._probe()
+    assert not ok and why.startswith("openseespy does not import: ")
+    blas = ("openseespy does not import: ImportError: libblas.so.3: cannot open shared "
+            "object file: No such file or directory")
+    assert "apt-get install libblas3" in OpenseesBackend.remedy(blas)
+    assert OpenseesBackend.remedy("ImportError: No module named 'openseespy'") == \
+        "pip install 'rockbench[opensees]'"
+
+
+def test_the_cause_of_an_import_failure_is_the_first_one():
+    from rockbench.engines.opensees import _import_cause
+
+    try:
+        try:
+            raise ImportError("libblas.so.3: cannot open shared object file")
+        except ImportError:
+            raise RuntimeError("Failed to import openseespy on Linux.")
+    except RuntimeError as e:
+        assert _import_cause(e) == "ImportError: libblas.so.3: cannot open shared object file"

@@ -29,12 +29,12 @@ import pytest
 import cases
 import rockbench as rb
 from rockbench.compare import TOLERANCES
-from rockbench.engines import available_backends, get_backend
+from rockbench.engines import get_backend
 from rockbench.errors import ParameterError
 from rockbench.scene.mechanism import mechanism
-from rockbench.testing import assert_agree
+from rockbench.testing import assert_agree, engine_params
 
-ENGINES = [n for n in available_backends() if n != "analytic"]
+ENGINES = engine_params()     # every registered engine; one that cannot run here skips, saying why
 
 pytestmark = pytest.mark.engines
 

@@ -14,9 +14,10 @@ import math
 import pytest
 
 import rockbench as rb
+from rockbench.testing import engine_params
 
 
-@pytest.mark.parametrize("engine", [e for e in rb.available_backends() if e != "analytic"])
+@pytest.mark.parametrize("engine", engine_params())
 def test_overturn_with_sliding_while_falling_is_an_overturn(engine):
     scene = rb.load_scene("paper-symmetric")
     pulse = rb.RickerPulse.dimensionless(4.0, 4.0, scene.structure, "symmetric", 1)
@@ -33,7 +34,7 @@ def test_overturn_with_sliding_while_falling_is_an_overturn(engine):
 # did and reported a diverged, non-overturned run; MuJoCo and PyBullet by 1-2 mrad of overshoot).
 # Now every backend stops at 0.98 x min(pi/2, geometric limit) = 1.5394 rad for both.
 
-@pytest.mark.parametrize("engine", rb.available_backends())
+@pytest.mark.parametrize("engine", engine_params(analytic=True))
 def test_block_falls_before_lying_flat(engine):
     """`rockbench run housner-block --engine E --pulse symmetric --amplitude 3 --frequency 1`,
     default settings: every backend reports the overturn the analytic model finds."""
@@ -49,7 +50,7 @@ def test_block_falls_before_lying_flat(engine):
     assert r.summary.t_overturn == pytest.approx(ref.summary.t_overturn, abs=0.1)
 
 
-@pytest.mark.parametrize("engine", rb.available_backends())
+@pytest.mark.parametrize("engine", engine_params(analytic=True))
 def test_symmetric_frame_falls_before_lying_flat(engine):
     """Free rocking of the symmetric frame released at 0.3 rad (about 2 alpha, beyond its
     critical angle): a short run that overturns in every backend at the fall angle."""

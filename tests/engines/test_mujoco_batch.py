@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import rockbench as rb
+from rockbench.testing import needs_engine
 
-pytestmark = pytest.mark.skipif("mujoco" not in rb.available_backends(),
-                                reason="mujoco is not installed")
+pytestmark = needs_engine("mujoco")
 
 
 def _pulses(scene, points):

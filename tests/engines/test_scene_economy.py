@@ -6,9 +6,11 @@ from __future__ import annotations
 import pytest
 
 import rockbench as rb
+from rockbench.testing import engine_params
 from rockbench.engines import get_backend
 
-ENGINES = [n for n in rb.available_backends() if n in ("pymunk", "mujoco", "pybullet")]
+ENGINES = engine_params(names=["pymunk", "mujoco", "pybullet"])
+COMPILED = engine_params(names=["pymunk", "mujoco"])
 
 
 def _count(engine: str, b) -> dict:
@@ -80,7 +82,7 @@ def test_the_loop_computes_device_forces_only_for_a_scene_with_devices(engine, n
         assert calls["forces"] > 0 and max(seen) > 0
 
 
-@pytest.mark.parametrize("engine", [e for e in ENGINES if e in ("pymunk", "mujoco")])
+@pytest.mark.parametrize("engine", COMPILED)
 @pytest.mark.parametrize("name, devices", [("paper-asymmetric", False),
                                            ("paper-asymmetric-hybrid", True)])
 def test_the_compiled_loop_gets_device_parameters_only_for_a_scene_with_devices(
