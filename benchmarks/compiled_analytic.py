@@ -112,7 +112,8 @@ def engine_chunk_lines(quick: bool) -> list[str]:
     path maps use (:func:`rockbench.studies.maps._engine_rows`: MuJoCo batched in rollout), in this
     process; the analytic model's compiled path on the same cells for scale."""
     import rockbench as rb
-    from rockbench.campaign.maps import ENGINE_AXES
+    from rockbench.campaign.maps import engine_axes
+    ENGINE_AXES = engine_axes()
     from rockbench.studies.maps import _engine_rows, map_cells
 
     cells = map_cells(grid=(12, 12), amplitude=ENGINE_AXES["amplitude"],

@@ -45,6 +45,11 @@ class RecordError(RockbenchError, ValueError):
     """A ground-motion record file cannot be parsed or is physically invalid."""
 
 
+class RockbenchWarning(UserWarning):
+    """Something a user should know that does not stop the work (a damaged store file
+    skipped, workers capped at the cores); the command line prints each one as one line."""
+
+
 class BackendUnavailable(RockbenchError, ImportError):
     """A registered backend cannot be used because its engine package does not import."""
 

@@ -110,6 +110,13 @@ LIMITS: dict[str, Limit] = {lim.key: lim for lim in (
           why="samples of one record (2e6 samples = 5.6 h at 0.01 s; a Record holds ~60 "
               "bytes per sample; the files are parsed in blocks and refused as soon as they "
               "pass it)"),
+    Limit("bootstrap", 1.0, 1e5,
+          why="bootstrap resamples of a fragility fit (each one lognormal fit per backend, "
+              "~1 ms: 1e5 resamples ~ 2 CPU min per backend; more adds nothing to a 95 % "
+              "interval)"),
+    Limit("map_cells", None, 1e6,
+          why="cells of one overturning map, grid NA x NW x pulses (the paper's maps: "
+              "100 x 100 x 4 = 40 000)"),
     Limit("rtol", 1e-13, 1e-3,
           why="relative tolerance of the analytic solver (rtol >= 1 is no accuracy at all)"),
     Limit("atol", 1e-16, 1e-3,

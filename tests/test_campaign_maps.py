@@ -79,7 +79,7 @@ def test_a_plan_names_its_evidence_and_a_users_plan_takes_the_default_set(tmp_pa
     another value is refused naming the key."""
     from rockbench.campaign.plan import plan_for_scenes
     from rockbench.errors import ParameterError
-    from rockbench.sweep.cases import campaign_plan, read_plan
+    from rockbench.campaign.plan import campaign_plan, read_plan
 
     assert campaign_plan()["choice_evidence"] == "quick"
     assert plan_for_scenes(["paper-asymmetric"])["choice_evidence"] == "default"

@@ -213,14 +213,14 @@ def test_the_committed_engine_maps_reproduce(engine, scene, grid):
     it measures."""
     from pathlib import Path
 
-    from rockbench.campaign.maps import ENGINE_AXES
+    from rockbench.campaign.maps import engine_axes
     from rockbench.studies.maps import reuse_map
 
     if engine not in rb.available_backends():
         pytest.skip(f"{engine} is not installed")
     root = Path(__file__).resolve().parents[1] / "reports" / "engine-maps"
     path = root / f"{scene}_{engine}_{grid[0]}x{grid[1]}.parquet"
-    df, why = reuse_map(path, scene, engine, **dict(ENGINE_AXES, grid=grid))
+    df, why = reuse_map(path, scene, engine, **dict(engine_axes(), grid=grid))
     assert df is not None, why
     assert len(df) == grid[0] * grid[1] * 4
     assert (df["status"] == "ok").mean() >= 0.95

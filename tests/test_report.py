@@ -392,7 +392,7 @@ def test_plan_fracture_cases_fracture_in_the_analytic_model():
     """The campaign's fracture cases do what cases.toml says: the analytic model fractures the
     tendons in each; the first survives, the others overturn."""
     from rockbench.campaign.run import _pulse_duration
-    from rockbench.sweep.cases import campaign_plan
+    from rockbench.campaign.plan import campaign_plan
 
     cases = campaign_plan()["fracture_cases"]
     assert len(cases) == 3 and campaign_plan(quick=True)["fracture_cases"] == ()

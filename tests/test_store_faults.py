@@ -18,6 +18,7 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
+from rockbench.errors import RockbenchWarning
 from rockbench.cli.main import main
 from rockbench.studies.maps import (MAP_COLUMNS, load_map, map_agreement, map_cells, mark_near_boundary,
                             run_map)
@@ -62,9 +63,9 @@ def test_a_bad_part_file_is_quarantined_and_its_cells_recomputed(fault, good, tm
         (copy / "part-zz.parquet").write_bytes(b"")
     else:
         pd.DataFrame({"x": [1, 2]}).to_parquet(copy / "part-zz.parquet")
-    with pytest.warns(RuntimeWarning, match="unreadable"):
+    with pytest.warns(RockbenchWarning, match="unreadable"):
         assert len(load_map(copy)) == (0 if fault == "truncated" else 6)   # a reader skips
-    with pytest.warns(RuntimeWarning, match="moved it to .*_quarantine"):
+    with pytest.warns(RockbenchWarning, match="moved it to .*_quarantine"):
         again = run_map("paper-asymmetric", store=copy, progress=False, **CELLS)
     assert again.attrs["cells_run"] == (6 if fault == "truncated" else 0)
     pd.testing.assert_frame_equal(again.drop(columns="wall_s"), full.drop(columns="wall_s"))
@@ -192,7 +193,7 @@ def test_an_unreachable_scheduler_is_one_line_within_seconds(tmp_path, capsys):
 def test_workers_are_capped_at_the_cores():
     from rockbench.sweep.executors import cpu_count, local_workers
 
-    with pytest.warns(RuntimeWarning, match="more than the"):
+    with pytest.warns(RockbenchWarning, match="more than the"):
         assert local_workers(cpu_count() + 62) == cpu_count()
     assert local_workers(1) == 1 and local_workers(None) == cpu_count()
 

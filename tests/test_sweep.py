@@ -12,7 +12,9 @@ import pytest
 
 import rockbench as rb
 from rockbench.sweep import runs, store
-from rockbench.sweep.cases import CHECK_SCENE, campaign_plan, catalogue
+from rockbench.campaign.plan import campaign_plan
+from rockbench.sweep.cases import catalogue
+from rockbench.testing.contract import CHECK_SCENE
 from rockbench.sweep.executors import execute
 from rockbench.engines import REGISTRY, available_backends
 from rockbench.engines.analytic import AnalyticBackend

@@ -80,7 +80,7 @@ def test_a_plan_file_needs_scenes_and_derives_the_rest(tmp_path):
 def test_the_paper_plan_is_one_file_shipped_with_the_package():
     from importlib import resources
 
-    from rockbench.sweep.cases import campaign_plan
+    from rockbench.campaign.plan import campaign_plan
 
     assert resources.files("rockbench").joinpath("scenarios/paper-plan.toml").is_file()
     p = campaign_plan()

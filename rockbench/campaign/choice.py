@@ -17,13 +17,7 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
-__all__ = ["CHOICE_SCENE", "CHOICE_DTS", "run_choice", "recommendation"]
-
-#: Scene and time steps [s] of the report's work-precision sweep.
-from ..sweep.cases import campaign_plan as _plan  # noqa: E402
-
-CHOICE_SCENE = _plan()["choice_scene"]     # scenarios/paper-plan.toml
-CHOICE_DTS = _plan()["choice_dts"]
+__all__ = ["run_choice", "recommendation"]
 
 
 def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
@@ -51,8 +45,11 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                 "breaks": None, "words": []}
     from ..studies.validation import validation_set
 
-    scene = CHOICE_SCENE if scene is None else scene
-    dts = tuple(CHOICE_DTS if dts is None else dts)
+    from .plan import campaign_plan
+
+    paper = campaign_plan()                   # the paper's plan when the caller gives none
+    scene = paper["choice_scene"] if scene is None else scene
+    dts = tuple(paper["choice_dts"] if dts is None else dts)
     dts = dts[:2] if quick else dts
     size = ("quick" if quick else
             {"quick": "default", "default": "full", "full": "full"}[evidence] if full
@@ -80,7 +77,7 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
             "stress_skipped": {} if sw is None else sw.skipped}
 
 
-def recommendation(advice: pd.DataFrame, scene: str = CHOICE_SCENE) -> list[str]:
+def recommendation(advice: pd.DataFrame, scene: str) -> list[str]:
     """The report's headline: per tolerance, the recommended engine and setting (rank 1 when
     it meets the tolerance), then the others in order, and those that cannot reach it."""
     lines = []

@@ -1,8 +1,8 @@
 """The overturning-map part of the default campaign (paper Figs. 4-7, issue 11).
 
-* Analytic maps at the paper's resolution (:data:`ANALYTIC_GRID`) for the paper's frames,
-  through the compiled analytic path;
-* every engine at 12 x 12 x 4 (:data:`MEASURED_GRID`) on a free-standing and a fracturing
+* Analytic maps at the paper's resolution (the plan's ``analytic_grid``) for the paper's
+  frames, through the compiled analytic path;
+* every engine at the plan's ``measured_grid`` or ``full_grid`` on a free-standing and a fracturing
   hybrid frame, each overlaid on the analytic map of the same cells and run length, with the
   fraction of agreeing cells, Cohen's kappa, the shift of the minimum-overturning boundary
   along A per frequency, and the cells near the analytic boundary (within
@@ -12,8 +12,8 @@ The engine maps take about 40 minutes on 2 cores, four times the report's budget
 (``rockbench report --full``) measures them into a folder kept with the report
 (``reports/engine-maps``), and the default report reuses each one only after
 :func:`rockbench.studies.maps.reuse_map` has re-run sample cells on the current code and found them
-reproduced; otherwise it computes the fast engines on a coarser grid (:data:`ENGINE_GRIDS`) and
-says why. Every map is kept in a resumable store.
+reproduced; otherwise it computes the fast engines on a coarser grid (the plan's
+``fast_grids``) and says why. Every map is kept in a resumable store.
 """
 
 from __future__ import annotations
@@ -28,34 +28,23 @@ import pandas as pd
 from ..studies.maps import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement, mark_near_boundary,
                    reuse_map, run_map)
 
-__all__ = ["ANALYTIC_SCENES", "ANALYTIC_GRID", "ENGINE_SCENES", "ENGINE_GRIDS", "run_maps"]
+__all__ = ["engine_axes", "run_maps", "is_fast"]
 
 def _paper_maps() -> dict[str, Any]:
-    from ..sweep.cases import campaign_plan
+    """The paper plan's maps (``scenarios/paper-plan.toml``, ``[campaign.maps]``); another
+    plan brings its own."""
+    from .plan import campaign_plan
 
     return campaign_plan()["maps"]
 
 
-_P = _paper_maps()
-#: The paper plan's analytic maps: scenes and grid (the paper's resolution); every value comes
-#: from ``scenarios/paper-plan.toml`` (``[campaign.maps]``), another plan brings its own.
-ANALYTIC_SCENES = _P["analytic_scenes"]
-ANALYTIC_GRID = dict(grid=_P["analytic_grid"], amplitude=_P["analytic_amplitude"],
-                     frequency=_P["analytic_frequency"], pulses="all")
-#: Scenes of the engine maps (a free-standing and a fracturing hybrid frame).
-ENGINE_SCENES = _P["engine_scenes"]
-#: Engine-map cells: A from 1 (below it the frame never uplifts), W from 1, and 3 s of free
-#: rocking after the pulse window (the analytic overlay uses the same cells and length).
-ENGINE_AXES = dict(amplitude=_P["engine_amplitude"], frequency=_P["engine_frequency"],
-                   pulses="all", tail=_P["engine_tail"])
-#: Grid of the measured engine maps (every engine, both scenes): run by ``full=True``
-#: (``rockbench report --full``) into ``measured`` (``reports/engine-maps``, kept in the
-#: repository), and reused by the default report when :func:`rockbench.studies.maps.reuse_map`
-#: reproduces sample cells of each on the current code.
-MEASURED_GRID = _P["measured_grid"]
-#: Grid per (engine speed class, scene) computed by the default report when no verified
-#: measured map exists (``make report`` stays within its 10-minute budget on 2 cores).
-ENGINE_GRIDS = {"fast": dict(_P["fast_grids"]), "slow": {}}
+def engine_axes(maps: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The engine maps' cells of a plan's ``maps`` (default the paper's): A and W ranges, the
+    four pulses, the free-rocking tail [s] after the pulse window (the analytic overlay uses
+    the same cells and length)."""
+    m = _paper_maps() if maps is None else maps
+    return dict(amplitude=m["engine_amplitude"], frequency=m["engine_frequency"],
+                pulses="all", tail=m["engine_tail"])
 
 
 def is_fast(engine: str) -> bool:
@@ -93,8 +82,7 @@ def _axes(maps: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     """(analytic grid, engine axes) of a plan's maps part."""
     return (dict(grid=tuple(maps["analytic_grid"]), amplitude=maps["analytic_amplitude"],
                  frequency=maps["analytic_frequency"], pulses="all"),
-            dict(amplitude=maps["engine_amplitude"], frequency=maps["engine_frequency"],
-                 pulses="all", tail=maps["engine_tail"]))
+            engine_axes(maps))
 
 
 def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: bool,

@@ -1,9 +1,11 @@
 """Campaign plans: what ``rockbench report`` runs, as data.
 
 * The paper's plan ships as ``rockbench/scenarios/paper-plan.toml`` (``kind = "campaign-plan"``);
-  :func:`rockbench.sweep.cases.campaign_plan` reads it.
+  :func:`campaign_plan` reads it (once, on first use).
 * ``rockbench report --plan FILE`` runs a user's plan file of the same form
-  (:func:`load_plan`): keys left out are derived from its ``scenes`` as below.
+  (:func:`load_plan`): keys left out are derived from its ``scenes`` as below. Every plan,
+  the paper's included, is checked completely against the one schema before any work
+  (:mod:`rockbench.campaign.plan_schema`, ``docs/plans.md``).
 * ``rockbench report SCENE [SCENE ...]`` runs :func:`plan_for_scenes`: the same parts as the
   paper's campaign, with every case chosen from the scenes themselves through the analytic
   model (nothing is taken from the paper's frames):
@@ -26,15 +28,18 @@ A = a_g / (g tan alpha), W = omega_g / p with alpha and p of each scene's taller
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import tomllib
+from importlib import resources
 from pathlib import Path
 from typing import Any, Sequence
 
 from ..errors import ParameterError, SceneError
 
-__all__ = ["plan_for_scenes", "load_plan", "scene_refs", "structure_table"]
+__all__ = ["plan_for_scenes", "load_plan", "scene_refs", "structure_table", "campaign_plan",
+           "read_plan"]
 
 _SHAPES = (("symmetric", 1), ("symmetric", -1), ("antisymmetric", 1), ("antisymmetric", -1))
 
@@ -105,7 +110,6 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
     quick form (one pulse, a 2-point map, two time steps, one record, no fracture cases).
     ``folder``: where Scene objects are saved for the worker processes."""
     from ..scene.scene import load_scene
-    from ..sweep.cases import campaign_plan
     from ..studies.validation import uplift_threshold
 
     if not scenes:
@@ -165,42 +169,48 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
     return plan
 
 
-def load_plan(path: str | os.PathLike, *, quick: bool = False,
-              folder: str | os.PathLike = ".") -> dict[str, Any]:
-    """A plan file (``kind = "campaign-plan"``; keys as in ``scenarios/paper-plan.toml``, in a
-    ``[campaign]`` table or at the top level). ``scenes`` is required; every other key left
-    out is derived from the scenes (:func:`plan_for_scenes`)."""
-    from ..sweep.cases import read_plan
-
-    p = Path(path)
+def _read_plan_file(path: str | os.PathLike) -> dict[str, Any]:
+    """A plan file's TOML data (one-line errors naming the file)."""
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        return tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as e:
         raise ParameterError("plan", str(path), "a readable TOML plan file",
                              getattr(e, "strerror", None) or str(e)) from None
     except tomllib.TOMLDecodeError as e:
         raise ParameterError("plan", str(path), "a valid TOML plan file", str(e)) from None
-    if data.get("kind", "campaign-plan") != "campaign-plan":
-        raise ParameterError("plan", str(path), 'a file with kind = "campaign-plan"',
-                             f"it says kind = {data.get('kind')!r}")
-    c = dict(data.get("campaign", data))
-    if not c.get("scenes"):
-        raise ParameterError("plan", str(path), "a plan with a `scenes` list")
-    base = plan_for_scenes([str((p.parent / s).resolve()) if str(s).endswith(".toml") else s
-                            for s in c["scenes"]], quick=quick, folder=folder)
-    given = {k: v for k, v in c.items() if k not in ("kind", "version", "quick")}
-    merged = {**{k: v for k, v in base.items() if k not in given}, **given}
+
+
+def plan_file_scenes(path: str | os.PathLike) -> list[str]:
+    """The scenes of a plan file (relative ``.toml`` paths made absolute), after checking the
+    whole file (:func:`rockbench.campaign.plan_schema.check_plan`)."""
+    from .plan_schema import check_plan, resolve_scenes
+
+    p = Path(path)
+    return list(resolve_scenes(check_plan(_read_plan_file(p), str(path), folder=p.parent),
+                               p.parent)["scenes"])
+
+
+def load_plan(path: str | os.PathLike, *, quick: bool = False,
+              folder: str | os.PathLike = ".") -> dict[str, Any]:
+    """A plan file (``kind = "campaign-plan"``; keys as in ``scenarios/paper-plan.toml``, in a
+    ``[campaign]`` table or at the top level; ``docs/plans.md``), checked completely before any
+    work (:func:`rockbench.campaign.plan_schema.check_plan`). ``scenes`` is required; every
+    other key left out is derived from the scenes (:func:`plan_for_scenes`)."""
+    from .plan_schema import check_plan, plan_keys, resolve_scenes
+
+    p = Path(path)
+    data = _read_plan_file(p)
+    c = resolve_scenes(check_plan(data, str(path), folder=p.parent), p.parent)  # all of it,
+    base = plan_for_scenes(c["scenes"], quick=quick, folder=folder)           # before any work
+    given = {k: v for k, v in c.items() if k != "quick"}
+    keys = set(plan_keys("campaign")) | {"maps"}
+    merged = {**{k: v for k, v in base.items() if k not in given and k in keys}, **given}
     merged["scenes"] = list(base["scenes"])
     merged.setdefault("maps", {})
     merged["maps"] = {**base["maps"], **dict(merged["maps"])}
-    for k in ("dt_case",):
-        merged[k] = dict(merged[k])
+    merged["dt_case"] = dict(merged["dt_case"])
     merged["quick"] = c.get("quick", {})
-    try:
-        full, q = read_plan({"campaign": _plain(merged)})
-    except (KeyError, TypeError, ValueError) as e:
-        raise ParameterError("plan", str(path), "a plan whose keys are as in "
-                             "rockbench/scenarios/paper-plan.toml", str(e)) from None
+    full, q = read_plan({"campaign": _plain(merged)}, str(path))
     return q if quick else full
 
 
@@ -242,3 +252,107 @@ def structure_table(refs: Sequence[Any]):
                          "value": "none" if v is None else f"{v:.6g}", "unit": unit or "-",
                          "meaning": meaning})
     return pd.DataFrame(rows, columns=["scene", "part", "field", "value", "unit", "meaning"])
+
+
+# =========================================================================================
+# Reading plans (the paper's and users' files)
+# =========================================================================================
+def _pairs(rows, kinds=(float, float)) -> tuple[tuple, ...]:
+    return tuple(tuple(k(v) for k, v in zip(kinds, r, strict=True)) for r in rows)
+
+
+def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    full = {"scenes": tuple(c["scenes"]), "pulse_points": _pairs(c["pulse_points"]),
+            "pulse_shapes": _pairs(c["pulse_shapes"], (str, int)),
+            "pulse_tail": float(c["pulse_tail"]), "map_scene": c["map_scene"],
+            "map_A": tuple(map(float, c["map_A"])), "map_W": tuple(map(float, c["map_W"])),
+            "map_duration_tail": None, "dt_sweep": tuple(map(float, c["dt_sweep"])),
+            "dt_case": dict(c["dt_case"]), "dt_tail": float(c["pulse_tail"]),
+            "free_phi0": float(c["free_phi0"]), "free_duration": float(c["free_duration"]),
+            "max_records": None, "record_tail": None,
+            "record_duration": (float(c["record_duration"]) if "record_duration" in c
+                                else None),
+            "record_frames": dict(c["record_frames"]),
+            "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float)),
+            "choice_scene": str(c.get("choice_scene", c["map_scene"])),
+            "choice_dts": tuple(map(float, c.get("choice_dts", (2e-3, 1e-3, 5e-4)))),
+            "choice_evidence": str(c.get("choice_evidence", "quick")),
+            "stress_scene": c.get("stress_scene"),
+            "stress_hybrid_scene": c.get("stress_hybrid_scene"),
+            "maps": _maps_plan(c.get("maps", {}), c),
+            "description": str(c.get("description", ""))}
+    q = c.get("quick", {})
+    quick = dict(full, scenes=tuple(q.get("scenes", full["scenes"][:2])),
+                 pulse_points=_pairs(q.get("pulse_points", full["pulse_points"][:1])),
+                 pulse_shapes=_pairs(q.get("pulse_shapes", full["pulse_shapes"][:1]),
+                                     (str, int)),
+                 pulse_tail=float(q.get("pulse_tail", 2.0)),
+                 map_A=tuple(map(float, q.get("map_A", full["map_A"][::4]))),
+                 map_W=tuple(map(float, q.get("map_W", full["map_W"][2:3]))),
+                 map_duration_tail=float(q.get("map_duration_tail", 2.0)),
+                 dt_sweep=tuple(map(float, q.get("dt_sweep", full["dt_sweep"][1:3]))),
+                 dt_case=dict(c["dt_case"]),
+                 dt_tail=float(q.get("dt_tail", 2.0)),
+                 free_duration=float(q.get("free_duration", 3.0)),
+                 max_records=int(q.get("max_records", 1)),
+                 record_tail=float(q.get("record_tail", 2.0)),
+                 record_duration=None,
+                 record_frames=dict(c["record_frames"]),
+                 fracture_cases=_pairs(q.get("fracture_cases", ()),
+                                       (str, str, int, float, float)))
+    return full, quick
+
+
+def _maps_plan(m: dict[str, Any], c: dict[str, Any]) -> dict[str, Any]:
+    """The maps part of a plan: analytic maps (scenes, grid, A and W ranges) and engine maps
+    (scenes, ranges, free-rocking tail [s], measured grid, the fast engines' grid per scene)."""
+    scenes = list(c["scenes"])
+    return {"analytic_scenes": tuple(m.get("analytic_scenes", scenes)),
+            "analytic_grid": tuple(int(v) for v in m.get("analytic_grid", (100, 100))),
+            "analytic_amplitude": str(m.get("analytic_amplitude", "0.5:8")),
+            "analytic_frequency": str(m.get("analytic_frequency", "0.5:10")),
+            "engine_scenes": tuple(m.get("engine_scenes", scenes[:1])),
+            "engine_amplitude": str(m.get("engine_amplitude", "1:8")),
+            "engine_frequency": str(m.get("engine_frequency", "1:10")),
+            "engine_tail": float(m.get("engine_tail", 3.0)),
+            "measured_grid": tuple(int(v) for v in m.get("measured_grid", (12, 12))),
+            "full_grid": tuple(int(v) for v in m.get("full_grid", (100, 100))),
+            "fast_grids": {k: tuple(int(x) for x in v)
+                           for k, v in m.get("fast_grids", {scenes[0]: (6, 6)}).items()}}
+
+
+def read_plan(data: dict[str, Any], source: str = "(data)", *,
+              folder: str | os.PathLike | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(plan, quick plan) of a plan file's data (``kind = "campaign-plan"``; the plan in its
+    ``[campaign]`` table or at the top level), checked completely first
+    (:func:`rockbench.campaign.plan_schema.check_plan`: one line naming ``source``, the key and
+    the valid form). Keys as in ``scenarios/paper-plan.toml`` (``docs/plans.md``)."""
+    from .plan_schema import check_plan
+
+    c = check_plan(data, source, folder=folder)
+    c.setdefault("description", data.get("description", ""))
+    return _plans(c)
+
+
+@functools.lru_cache(maxsize=1)
+def _paper_plans() -> tuple[dict[str, Any], dict[str, Any]]:
+    text = (resources.files("rockbench") / "scenarios" / "paper-plan.toml").read_text(
+        encoding="utf-8")
+    return read_plan(tomllib.loads(text), "rockbench/scenarios/paper-plan.toml")
+
+
+def campaign_plan(quick: bool = False) -> dict[str, Any]:
+    """The paper's plan (a fresh copy; ``scenarios/paper-plan.toml``, read and checked on first
+    use): ``scenes``, ``pulse_points`` ((A, W) pairs), ``pulse_shapes`` ((shape, sign) pairs),
+    ``pulse_tail`` [s], ``map_scene``, ``map_A``, ``map_W``, ``map_duration_tail`` [s] (None:
+    pulse + 10 s), ``dt_sweep`` [s], ``dt_case`` (scene, shape, sign, A, W), ``dt_tail`` [s],
+    ``free_phi0`` [alpha], ``free_duration`` [s], ``max_records`` (None: all), ``record_tail``
+    [s] (None: record + 10 s), ``record_duration`` [s] (cap on a record run's length from its
+    start, None: no cap), ``record_frames`` (label -> scene), ``fracture_cases`` ((scene,
+    shape, sign, A, W)), the choice and stress scenes and ``maps`` (``docs/plans.md``).
+
+    ``quick``: a few cases (two scenes, one pulse, a 2 x 2 map, two time steps, shorter
+    runs) for tests and a first look.
+    """
+    p = _paper_plans()[1 if quick else 0]
+    return {k: dict(v) if isinstance(v, dict) else v for k, v in p.items()}

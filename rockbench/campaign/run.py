@@ -51,23 +51,11 @@ from ..result import motion_label
 from ..runner import REFERENCE, resolve_engines
 from ..scene.records import bundled_dir, find_records
 from ..sweep import store as S
-from ..sweep.cases import campaign_plan
+from .plan import campaign_plan
 from ..sweep.executors import check_options, cpu_count, execute
 
 __all__ = [
     "CAMPAIGN_COLUMNS",
-    "DT_CASE",
-    "DT_SWEEP",
-    "FREE_DURATION",
-    "FREE_PHI0_OVER_ALPHA",
-    "MAP_A",
-    "MAP_SCENE",
-    "MAP_W",
-    "PULSE_POINTS",
-    "PULSE_SHAPES",
-    "PULSE_TAIL",
-    "RECORD_FRAMES",
-    "SCENES",
     "campaign_plan",
     "code_fingerprint",
     "find_records",
@@ -75,28 +63,6 @@ __all__ = [
 ]
 
 code_fingerprint = S.code_fingerprint
-
-_PLAN = campaign_plan()
-#: The paper's frames (built-in scenes).
-SCENES: tuple[str, ...] = _PLAN["scenes"]
-#: (A, W) points of the pulse cases: A = a_g / (g tan alpha), W = omega_g / p.
-PULSE_POINTS: tuple[tuple[float, float], ...] = _PLAN["pulse_points"]
-#: (shape, sign) of the pulse cases.
-PULSE_SHAPES: tuple[tuple[str, int], ...] = _PLAN["pulse_shapes"]
-#: Free rocking after each pulse [s] (the pulse itself lasts 6 T_g).
-PULSE_TAIL: float = _PLAN["pulse_tail"]
-#: Overturning map grid (positive symmetric pulse).
-MAP_SCENE: str = _PLAN["map_scene"]
-MAP_A: tuple[float, ...] = _PLAN["map_A"]
-MAP_W: tuple[float, ...] = _PLAN["map_W"]
-#: Time steps [s] of the speed-against-accuracy sweep, and its case.
-DT_SWEEP: tuple[float, ...] = _PLAN["dt_sweep"]
-DT_CASE: dict[str, Any] = _PLAN["dt_case"]
-#: Free rocking: initial rotation phi0 / alpha [-] and duration [s].
-FREE_PHI0_OVER_ALPHA: float = _PLAN["free_phi0"]
-FREE_DURATION: float = _PLAN["free_duration"]
-#: Frames of the record part (label -> scene), as in the paper's Fig. 9.
-RECORD_FRAMES: dict[str, str] = _PLAN["record_frames"]
 
 
 def _pulse_duration(scene_name: str, A: float, W: float, shape: str, tail: float | None):
@@ -624,7 +590,8 @@ def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list
     rows = T.sweep_rows(_sweep(rec_cases, store=store, **run))
     if len(rows):
         byscene = {v: k for k, v in frames.items()}
-        rows["record"] = [Path(p).stem for p in rows["path"]]
+        name_of = {str(r["path"]): r["name"] for r in recs}       # by path, never the stem
+        rows["record"] = [name_of.get(str(p), Path(p).stem) for p in rows["path"]]
         rows["frame"] = [byscene.get(s, s) for s in rows["scene"]]
         rows["polarity"] = [int(round(float(v))) for v in rows["polarity"]]
         rows = T.with_verdicts(rows, ("record", "frame", "polarity"))

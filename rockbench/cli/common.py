@@ -11,14 +11,16 @@ line); and the output helpers (JSON, folders, atomic CSV writes). Commands live 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import math
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
-from ..errors import ParameterError, RecordError, RockbenchError
+from ..errors import ParameterError, RecordError, RockbenchError, RockbenchWarning
 
 __all__ = ["CommandLineError", "Parser", "add_setting_option", "add_engine_option",
            "add_quiet_option", "add_scene_options", "add_motion_options", "add_run_options",
@@ -424,6 +426,27 @@ def engine_names(args: argparse.Namespace, option: str = "--engine") -> list[str
     if not names:
         raise ParameterError(option, ",".join(given), "backend names")
     return resolve_engines(names, name=option)
+
+
+@contextlib.contextmanager
+def one_line_warnings():
+    """A context in which a warning (a damaged store file skipped, workers capped) prints as
+    one line ``rockbench: warning: ...`` on stderr, without the source line."""
+    import warnings
+
+    old = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"rockbench: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+    warnings.showwarning = show
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", RockbenchWarning)   # two damaged files: two lines
+            warnings.showwarning = show
+            yield
+    finally:
+        warnings.showwarning = old
 
 
 def absent_engine_lines(args: argparse.Namespace) -> list[str]:

@@ -88,7 +88,10 @@ def cmd_fragility(args: argparse.Namespace) -> int:
     from ..studies.fragility import run_fragility
     from ..runner import REFERENCE, resolve_engines
 
+    from ..studies.fragility import check_bootstrap
+
     load_scene_from(args)                      # a bad scene or --set fails now
+    check_bootstrap(args.boot, args.seed, names=("--boot", "--seed"))
     engines = engine_names(args)
     selected = [e for e in (engines or resolve_engines(None)) if e != REFERENCE]
     settings = engine_settings(list(args.settings), selected, dt=args.dt, also=(REFERENCE,))

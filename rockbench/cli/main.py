@@ -52,7 +52,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .common import (CommandLineError, Parser, absent_engine_lines, add_engine_option, add_motion_options,
+from .common import (CommandLineError, Parser, absent_engine_lines, add_engine_option,
+                     one_line_warnings, add_motion_options,
                      add_quiet_option, add_run_options, add_scene_options, add_setting_option,
                      arg_count, arg_key_value, arg_names, arg_nonzero, arg_number, arg_positive,
                      arg_sign, backend_overrides, engine_names, engine_settings, load_scene_from,
@@ -468,15 +469,9 @@ def cmd_report(args: argparse.Namespace) -> int:
         kwargs["workers"] = args.workers
     plan_scenes = list(args.scenes)
     if args.plan is not None:
-        import tomllib
+        from ..campaign.plan import plan_file_scenes
 
-        try:
-            data = tomllib.loads(Path(args.plan).read_text(encoding="utf-8"))
-            plan_scenes = list(data.get("campaign", data).get("scenes") or [])
-            plan_scenes = [str((Path(args.plan).parent / x).resolve())
-                           if str(x).endswith(".toml") else x for x in plan_scenes]
-        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, AttributeError):
-            plan_scenes = []        # the campaign reads the plan and names what is wrong
+        plan_scenes = plan_file_scenes(args.plan)    # the whole plan checked, before any work
     _print_constants(args.out, plan_scenes or None)
     path = campaign.run_campaign(args.out, **kwargs)
     print(f"report: {path}")
@@ -523,7 +518,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     configure(quiet=bool(getattr(args, "quiet", False)))
     try:
-        rc = COMMANDS[args.command](args)
+        with one_line_warnings():
+            rc = COMMANDS[args.command](args)
         if args.command in ENGINE_COMMANDS:     # every engine it could not use, one line each
             for line in absent_engine_lines(args):
                 print(f"{PROG}: {line}", file=sys.stderr)

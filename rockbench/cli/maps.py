@@ -55,26 +55,6 @@ def add_map_command(sub) -> None:
     p.add_argument("--json", action="store_true", help="print JSON")
 
 
-def _one_line_warnings():
-    """A context in which a warning prints as one line ``rockbench: warning: ...``."""
-    import contextlib
-    import warnings
-
-    @contextlib.contextmanager
-    def ctx():
-        old = warnings.showwarning
-
-        def show(message, category, filename, lineno, file=None, line=None):
-            print(f"rockbench: warning: {' '.join(str(message).split())}", file=sys.stderr)
-
-        warnings.showwarning = show
-        try:
-            yield
-        finally:
-            warnings.showwarning = old
-    return ctx()
-
-
 def _figure_path(text: str | None) -> Path | None:
     """The --figure path, checked before any work: a known image suffix, a writable folder."""
     if text is None:
@@ -128,6 +108,69 @@ def _with_near_boundary(df, store: Path):
     return mark_near_boundary(df, scene, tail=None if tail == 10.0 else tail)
 
 
+#: Options of a map run that mean nothing with --compare (a comparison reads two stores).
+_RUN_OPTIONS = (("scene", None, "SCENE"), ("grid", "100x100", "--grid"),
+                ("amplitude", "0.5:8", "--amplitude"), ("frequency", "0.5:10", "--frequency"),
+                ("pulses", "all", "--pulses"), ("engine", "analytic", "--engine"),
+                ("store", None, "--store"), ("adaptive", False, "--adaptive"),
+                ("workers", None, "--workers"), ("scheduler", None, "--scheduler"))
+
+
+def _compare_alone(args: argparse.Namespace) -> None:
+    """ParameterError when an option that runs a map is given with --compare (it would be
+    ignored: the comparison reads the two stores as they are)."""
+    for attr, default, option in _RUN_OPTIONS:
+        if getattr(args, attr, default) != default:
+            raise ParameterError(option, getattr(args, attr),
+                                 "left out with --compare A B (a comparison reads the two "
+                                 "stores as they are; run each map first)")
+    if args.overrides or args.settings:
+        raise ParameterError("--set" if args.overrides else "--setting",
+                             (args.overrides or args.settings)[0],
+                             "left out with --compare A B (a comparison reads the two stores)")
+
+
+def _is_map_store(path: str) -> None:
+    """RockbenchError naming ``path`` unless it is a map store folder (``_inputs.json`` or map
+    part files: what ``rockbench map --store`` writes)."""
+    from ..errors import RockbenchError
+    from ..sweep.map_store import part_files
+
+    p = Path(path)
+    if not p.is_dir():
+        raise ParameterError("--compare", path, "map store folders written by rockbench map "
+                             "(NAME.parquet)", "no such folder" if not p.exists()
+                             else "a file, not a folder")
+    if not (p / "_inputs.json").is_file() and not part_files(p):
+        raise RockbenchError(f"--compare: {path} is not a map store (it holds neither "
+                             f"_inputs.json nor part-*.parquet files of a map); give the "
+                             f"--store folders of two `rockbench map` runs")
+
+
+def agreement_words(ag: dict) -> str:
+    """A map agreement in words, its disagreement shown: the cells compared, how many differ,
+    the fraction (never rounded up to 100 % while one differs), kappa, and the cells left out
+    (held by one map only; not ok in either)."""
+    n, differ = ag["n"], ag.get("differ", 0)
+    frac = 100 * ag["fraction"] if n else float("nan")
+    pct = f"{frac:.2f}" if not (differ and frac > 99.99) else f"{frac:.4f}"
+    text = (f"{differ} of {n} cells differ ({pct} % agree), Cohen's kappa "
+            f"{ag['kappa']:.3f}" if ag["kappa"] == ag["kappa"] else
+            f"{differ} of {n} cells differ ({pct} % agree), Cohen's kappa undefined (every "
+            f"cell has one verdict in both maps)")
+    left = []
+    only = ag.get("cells_first", n) - ag.get("common", n), ag.get("cells_second", n) - ag.get(
+        "common", n)
+    if any(only):
+        left.append(f"compared on the {ag.get('common', n)} cells both hold ({only[0]} only in "
+                    f"the first, {only[1]} only in the second)")
+    bad = ag.get("not_ok_first", 0), ag.get("not_ok_second", 0)
+    if any(bad):
+        left.append(f"{bad[0]} + {bad[1]} common cells not ok in the first + second map, left "
+                    f"out")
+    return text + ("; " + "; ".join(left) if left else "")
+
+
 def _same_structure(first: str, second: str) -> None:
     """RockbenchError unless the two stores' ``_inputs.json`` name the same structure (its
     parameters, the name and description aside): a map of one structure says nothing about
@@ -173,16 +216,14 @@ def _set_aside_other_code(store: Path, *, quiet: bool) -> None:
 
 
 def cmd_map(args: argparse.Namespace) -> int:
-    with _one_line_warnings():
-        return _cmd_map(args)
-
-
-def _cmd_map(args: argparse.Namespace) -> int:
     from ..errors import RockbenchError
     from ..studies.maps import NEAR_BOUNDARY_MARGIN, describe_shift, load_map, map_agreement, run_map
 
     figure = _figure_path(args.figure)
     if args.compare:
+        _compare_alone(args)
+        for path in args.compare:
+            _is_map_store(path)
         _same_structure(*args.compare)
         a, b = (load_map(x) for x in args.compare)
         a = _with_near_boundary(a, Path(args.compare[0]))
@@ -205,8 +246,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         if args.json:
             print_json(out)
             return 0
-        print(f"{args.compare[1]} against {args.compare[0]}: {ag['n']} cells, "
-              f"{100 * ag['fraction']:.2f} % agree, Cohen's kappa {ag['kappa']:.3f}")
+        print(f"{args.compare[1]} against {args.compare[0]}: {agreement_words(ag)}")
         if "near_boundary" in ag:
             print(f"{ag['near_boundary']} cells lie within {100 * NEAR_BOUNDARY_MARGIN:g} % in A "
                   f"of the first map's boundary (near the boundary): "

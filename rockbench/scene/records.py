@@ -255,8 +255,13 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
     ``records.csv`` next to them (columns: ``record`` = file stem, ``dt_s`` or ``dt`` [s], and
     ``units``: "cm/s^2..." / "m/s^2..." / "g"; cm/s^2 when absent).
 
-    Returns (records, notes): each record a dict name, path, dt [s] or None, units or None;
-    notes say which files were skipped and why.
+    Returns (records, notes): each record a dict name, path (resolved), dt [s] or None, units
+    or None; notes say which other files were skipped and why. A record is identified by its
+    path: its ``name`` is its file stem, or, where two files under ``records_dir`` share a stem
+    (``a/LA21.dat``, ``b/LA21.dat``), its path relative to ``records_dir`` without the suffix
+    (``a/LA21``). A ``records.csv`` that cannot be read, has an unknown unit or a bad dt, or
+    lists a file that is not there is an error (:class:`~rockbench.errors.RecordError` naming
+    the listing and the entry), not a folder quietly smaller.
     """
     root = _check_path(records_dir, "records_dir")
     if not root.is_dir():
@@ -266,16 +271,18 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
     records, notes = [], []
     tables: dict[Path, dict[str, dict[str, Any]]] = {}
     for listing in sorted(root.rglob("records.csv")):
-        try:
-            tables[listing.parent] = _read_listing(listing)
-        except RecordError as e:
-            notes.append(f"{e}; its files are skipped")
+        tables[listing.parent] = table = _read_listing(listing)      # RecordError: stop here
+        stems = {q.stem for q in listing.parent.iterdir() if q.is_file()}
+        for name in table:
+            if name not in stems:
+                raise RecordError(f"{listing}: lists record {name!r}, but there is no file "
+                                  f"{name}.* beside it (remove the line or add the file)")
     for p in sorted(root.rglob("*"), key=lambda q: (q.stem.lower(), str(q))):
         if not p.is_file() or p.name == "records.csv" or p.suffix.lower() in (".md", ".csv"):
             continue
         if p.suffix.lower() == ".at2":
             records.append({"name": p.stem, "path": str(p.resolve()), "dt": None,
-                            "units": None})
+                            "units": None, "_rel": p.relative_to(root)})
             continue
         entry = tables.get(p.parent, {}).get(p.stem)
         if entry is None:
@@ -283,7 +290,14 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
                          f"records.csv with its dt)")
             continue
         records.append({"name": p.stem, "path": str(p.resolve()), "dt": entry["dt"],
-                        "units": entry["units"]})
+                        "units": entry["units"], "_rel": p.relative_to(root)})
+    stems: dict[str, int] = {}
+    for r in records:
+        stems[r["name"]] = stems.get(r["name"], 0) + 1
+    for r in records:
+        rel = r.pop("_rel")
+        if stems[r["name"]] > 1:                  # the stem alone would merge two records
+            r["name"] = rel.with_suffix("").as_posix()
     return records, notes
 
 

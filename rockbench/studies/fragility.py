@@ -142,23 +142,28 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike]
     :func:`rockbench.scene.records.find_records`: ``.AT2`` files and headerless files listed in a
     ``records.csv``), single files (``.AT2``, or headerless beside a ``records.csv`` listing
     them), bundled ensemble names (:func:`bundled_ensembles`), or records this function
-    returned. Each record a dict name, path,
-    dt [s] or None, units or None; ParameterError when a source is none of these or no record
-    is found; a name given twice is kept once."""
+    returned. Each record a dict name, path, dt [s] or None, units or None; ParameterError when
+    a source is none of these or no record is found. A record is identified by its resolved
+    path: the same file given twice is kept once, and two files that share a name (``LA21`` in
+    two folders) are both kept, named by their folders (``a/LA21``, ``b/LA21``)."""
     from ..scene.records import find_records, listed_metadata
 
     items = [sources] if isinstance(sources, (str, os.PathLike)) else list(sources)
     if not items:
         raise ParameterError("records", sources, "at least one folder, file or ensemble name")
-    out: dict[str, dict[str, Any]] = {}
+    out: dict[str, dict[str, Any]] = {}            # resolved path -> record
     top = None
     for src in items:
         if isinstance(src, Mapping):          # already resolved (a dict of this function)
-            out.setdefault(src["name"], dict(src))
+            out.setdefault(str(src["path"]), dict(src))
             continue
         p = Path(src)
         if p.is_dir():
-            recs = find_records(p)[0]
+            recs, notes = find_records(p)
+            if not recs:
+                raise ParameterError("records", str(src), "a folder holding at least one "
+                                     "record (.AT2, or listed in a records.csv)",
+                                     "; ".join(notes[:3]) or "it holds no file")
         elif p.is_file():
             if p.suffix.lower() == ".at2":
                 recs = [{"name": p.stem, "path": str(p.resolve()), "dt": None, "units": None}]
@@ -179,11 +184,31 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike]
             raise ParameterError("records", str(src), f"an existing folder or record file, or "
                                  f"a bundled ensemble: {top}")
         for r in recs:
-            out.setdefault(r["name"], r)
+            out.setdefault(str(r["path"]), r)
     if not out:
         raise ParameterError("records", sources, "folders or files holding at least one record "
                              "(.AT2, or listed in a records.csv)")
-    return list(out.values())
+    return _unique_names(list(out.values()))
+
+
+def _unique_names(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``records`` with names that tell them apart: a name two records share gets the name of
+    each one's folder in front (``a/LA21``), then the whole path if that is not enough."""
+    def clashes(recs):
+        seen: dict[str, int] = {}
+        for r in recs:
+            seen[r["name"]] = seen.get(r["name"], 0) + 1
+        return {n for n, k in seen.items() if k > 1}
+
+    dup = clashes(records)
+    for r in records:
+        if r["name"] in dup:
+            r["name"] = f"{Path(r['path']).parent.name}/{Path(r['name']).name}"
+    dup = clashes(records)
+    for r in records:
+        if r["name"] in dup:
+            r["name"] = str(Path(r["path"]).with_suffix(""))
+    return records
 
 
 def record_ims(records: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
@@ -193,6 +218,10 @@ def record_ims(records: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
     rows = []
     for r in records:
         rec = load_record(r["path"], dt=r.get("dt"), units=r.get("units"))
+        if not np.any(np.asarray(rec.samples) != 0.0):
+            raise ParameterError("records", r["path"], "records with a non-zero acceleration",
+                                 "every sample of this one is 0 (PGA 0): no scale of it can "
+                                 "move anything")
         rows.append({"record": r["name"], "path": r["path"], "pga": intensity(rec, "pga"),
                      "pgv": intensity(rec, "pgv"), "duration": rec.t_end - rec.t_start})
     return pd.DataFrame(rows)
@@ -317,6 +346,22 @@ def fragility_curve(x: Sequence[float], median: float, dispersion: float) -> np.
     return ndtr(np.log(x / median) / dispersion)
 
 
+def check_bootstrap(n_boot: Any, seed: Any, *, names: tuple[str, str] = ("n_boot", "seed")
+                    ) -> tuple[int, int]:
+    """(n_boot, seed) checked before any work: an integer number of resamples within the limit
+    ``bootstrap`` (:mod:`rockbench.limits`) and a seed in [0, 2**32 - 1]; ``names``: how the
+    caller calls them (the command line: ``--boot``, ``--seed``)."""
+    from ..limits import check_in_limit
+
+    if isinstance(n_boot, bool) or not isinstance(n_boot, (int, np.integer)):
+        raise ParameterError(names[0], n_boot, "an integer number of resamples >= 1")
+    check_in_limit("bootstrap", names[0], int(n_boot))
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) \
+            or not 0 <= int(seed) <= 2 ** 32 - 1:
+        raise ParameterError(names[1], seed, "an integer in [0, 4294967295]")
+    return int(n_boot), int(seed)
+
+
 def bootstrap(runs: pd.DataFrame, *, n_boot: int = N_BOOT, seed: int = 0,
               grid: Sequence[float] | None = None, reference: str = "analytic",
               level: float = 1 - ALPHA) -> dict[str, dict[str, Any]]:
@@ -328,8 +373,7 @@ def bootstrap(runs: pd.DataFrame, *, n_boot: int = N_BOOT, seed: int = 0,
     ``band`` (low and high of the curve on ``grid``), ``n_valid`` (draws with a regular fit),
     and, for backends other than ``reference``, ``median_difference_ci`` of
     median(backend) - median(reference) [unit of im]."""
-    if not (isinstance(n_boot, int) and n_boot >= 1):
-        raise ParameterError("n_boot", n_boot, "an integer >= 1")
+    n_boot, seed = check_bootstrap(n_boot, seed)
     ok = runs[runs["status"] == "ok"]
     records = sorted(ok["record"].unique())
     backends = list(dict.fromkeys(ok["backend"]))
@@ -611,6 +655,7 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
 
     if measure not in MEASURES:
         raise ParameterError("intensity", measure, f"one of {', '.join(MEASURES)}")
+    check_bootstrap(n_boot, seed)                 # every bound before any run
     ladder = parse_scales(scales)
     names = resolve_engines(engines, name="engine")
     names = [REFERENCE] + [n for n in names if n != REFERENCE]

@@ -90,9 +90,13 @@ def map_cells(*, grid: Any = (100, 100), amplitude: Any = (0.5, 8.0),
     the inclusive ranges ``amplitude`` and ``frequency`` ("LO:HI" or a pair), for each selected
     pulse. ``grid=(8, 8), amplitude="1:8"`` gives A = 1, 2, ..., 8. Both ranges must lie
     within the limits of every run (:data:`rockbench.limits.LIMITS` ``A`` and ``W``)."""
+    from ..limits import check_count
+
     As, Ws = _axes(grid, amplitude, frequency)
+    names = _pulses(pulses)
+    check_count("map_cells", "grid", len(As) * len(Ws) * len(names), "cells")
     return [(PULSES[p][0], PULSES[p][1], float(A), float(W))
-            for p in _pulses(pulses) for W in Ws for A in As]
+            for p in names for W in Ws for A in As]
 
 
 def _axes(grid: Any, amplitude: Any, frequency: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -102,9 +106,13 @@ def _axes(grid: Any, amplitude: Any, frequency: Any) -> tuple[np.ndarray, np.nda
     na, nw = _grid(grid)
     a0, a1 = _range(amplitude, "amplitude")
     w0, w1 = _range(frequency, "frequency")
-    for key, name, lo, hi in (("A", "amplitude", a0, a1), ("W", "frequency", w0, w1)):
+    for key, name, lo, hi, n in (("A", "amplitude", a0, a1, na), ("W", "frequency", w0, w1, nw)):
         for v in (lo, hi):  # the limits of `rockbench run`, for every path of a map
             check_in_limit(key, name, v)
+        if n > 1 and not lo < hi:
+            raise ParameterError(name, amplitude if key == "A" else frequency,
+                                 f"LO:HI with LO < HI for a grid of {n} points along {key} "
+                                 f"(equal ends would give one cell {n} times)")
     As = np.linspace(a0, a1, na) if na > 1 else np.array([a0])
     Ws = np.linspace(w0, w1, nw) if nw > 1 else np.array([w0])
     return np.round(As, 12), np.round(Ws, 12)
@@ -567,6 +575,11 @@ def map_agreement(a: pd.DataFrame, b: pd.DataFrame) -> dict[str, Any]:
     ``disagree_away`` (differing verdicts near and away from it). ``cells``: the common ok
     cells (key, both verdicts, ``agree``, ``near_boundary``).
 
+    What is left out is counted, never hidden: ``cells_first``, ``cells_second`` (each map's
+    cells), ``common`` (cells both hold), ``not_ok_first``, ``not_ok_second`` (common cells not
+    ok in that map: left out of ``n``), ``differ`` (of the ``n`` compared, the verdicts that
+    differ).
+
     RockbenchError when the maps have no cell in common (nothing to compare); ``n`` = 0 when
     they share cells but none ran ok in both (``fraction`` and ``kappa`` then NaN)."""
     key = list(MAP_KEY)
@@ -582,6 +595,9 @@ def map_agreement(a: pd.DataFrame, b: pd.DataFrame) -> dict[str, Any]:
             f"{_span(a['amplitude'])}, W {_span(a['frequency'])}; second: {len(b)} cells, A "
             f"{_span(b['amplitude'])}, W {_span(b['frequency'])}): compare maps run on the "
             f"same grid (--grid, --amplitude, --frequency, --pulses)")
+    n_common = len(m)
+    not_ok_a = int((m["status_a"] != "ok").sum())
+    not_ok_b = int((m["status_b"] != "ok").sum())
     m = m[(m["status_a"] == "ok") & (m["status_b"] == "ok")].reset_index(drop=True)
     va = m["overturned_a"].astype(bool).to_numpy()
     vb = m["overturned_b"].astype(bool).to_numpy()
@@ -603,7 +619,9 @@ def map_agreement(a: pd.DataFrame, b: pd.DataFrame) -> dict[str, Any]:
     near = (m["near_boundary"].fillna(False).astype(bool).to_numpy() if has_near
             else np.zeros(n, dtype=bool))
     cells = m[key].assign(overturned_a=va, overturned_b=vb, agree=va == vb, near_boundary=near)
-    out = {"n": n, "fraction": agree, "kappa": float(kappa),
+    out = {"n": n, "fraction": agree, "kappa": float(kappa), "differ": int((va != vb).sum()),
+           "cells_first": len(a), "cells_second": len(b), "common": n_common,
+           "not_ok_first": not_ok_a, "not_ok_second": not_ok_b,
            "b_overturns_a_survives": int((vb & ~va).sum()),
            "a_overturns_b_survives": int((va & ~vb).sum()), "shift": ba, "cells": cells}
     if has_near:

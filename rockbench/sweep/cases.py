@@ -20,8 +20,7 @@ store's key), :func:`pulse_grid` builds the cases of a Ricker-pulse map.
 The **catalogue** (:func:`catalogue`, from ``rockbench/scenarios/cases.toml``) holds the named
 cases every part of rockbench shares: the cross-engine cases (free rocking, pulses the analytic
 frame survives, pulses that overturn it: :class:`FreeCase`, :class:`PulseCase`), the default
-campaign's plan (:func:`campaign_plan`), the benchmarks' cases and the scene of the contract
-check (:data:`CHECK_SCENE`).
+and the benchmarks' cases. The campaign's plans are read by :mod:`rockbench.campaign.plan`.
 """
 
 from __future__ import annotations
@@ -44,8 +43,7 @@ from .store import key
 
 __all__ = ["CASE_KEYS", "normalize_case", "case_id", "flatten_case", "case_label", "pulse_grid",
            "scene_name", "load_case_scene",
-           "FreeCase", "PulseCase", "Catalogue", "catalogue", "campaign_plan", "read_plan",
-           "CHECK_SCENE"]
+           "FreeCase", "PulseCase", "Catalogue", "catalogue"]
 
 #: The keys a case may have (every other key is an error).
 CASE_KEYS = ("scene", "overrides", "engine", "settings", "motion", "phi0", "duration")
@@ -322,8 +320,7 @@ class PulseCase(NamedTuple):
 class Catalogue:
     """The named cases of ``rockbench/scenarios/cases.toml`` (its comments say why each was
     chosen). Cross-engine cases: ``free_cases``, ``survive_cases``, ``overturn_cases`` and the
-    constants they are made of; ``plan`` / ``quick_plan``: the default campaign
-    (:func:`campaign_plan`); ``check_scene``: the scene of ``check_backend``'s runs;
+    constants they are made of;
     ``benchmarks``: the cases of ``benchmarks/run.py`` and ``benchmarks/mujoco_rollout.py``
     (plain data: label, scene, motion spec, phi0 [alpha], duration [s])."""
 
@@ -338,9 +335,6 @@ class Catalogue:
     overturn_end: float
     overturn_fall: float
     overturn_thresholds: dict[tuple[str, float, str, int], float]
-    plan: dict[str, Any]
-    quick_plan: dict[str, Any]
-    check_scene: str
     benchmarks: dict[str, Any]
 
     @property
@@ -361,84 +355,8 @@ class Catalogue:
                 for s, Ws in self.overturn_w.items() for W in Ws for shape, sign in self.pulses]
 
 
-def _evidence(size: Any) -> str:
-    """A plan's ``choice_evidence``: the validation set the report's advice is chosen and
-    confirmed on (:func:`rockbench.studies.validation.validation_set` sizes)."""
-    if size not in ("quick", "default", "full"):
-        raise ParameterError("choice_evidence", size, "'quick', 'default' or 'full'")
-    return str(size)
-
-
 def _pairs(rows, kinds=(float, float)) -> tuple[tuple, ...]:
     return tuple(tuple(k(v) for k, v in zip(kinds, r, strict=True)) for r in rows)
-
-
-def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    full = {"scenes": tuple(c["scenes"]), "pulse_points": _pairs(c["pulse_points"]),
-            "pulse_shapes": _pairs(c["pulse_shapes"], (str, int)),
-            "pulse_tail": float(c["pulse_tail"]), "map_scene": c["map_scene"],
-            "map_A": tuple(map(float, c["map_A"])), "map_W": tuple(map(float, c["map_W"])),
-            "map_duration_tail": None, "dt_sweep": tuple(map(float, c["dt_sweep"])),
-            "dt_case": dict(c["dt_case"]), "dt_tail": float(c["pulse_tail"]),
-            "free_phi0": float(c["free_phi0"]), "free_duration": float(c["free_duration"]),
-            "max_records": None, "record_tail": None,
-            "record_duration": (float(c["record_duration"]) if "record_duration" in c
-                                else None),
-            "record_frames": dict(c["record_frames"]),
-            "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float)),
-            "choice_scene": str(c.get("choice_scene", c["map_scene"])),
-            "choice_dts": tuple(map(float, c.get("choice_dts", (2e-3, 1e-3, 5e-4)))),
-            "choice_evidence": _evidence(c.get("choice_evidence", "quick")),
-            "stress_scene": c.get("stress_scene"),
-            "stress_hybrid_scene": c.get("stress_hybrid_scene"),
-            "maps": _maps_plan(c.get("maps", {}), c),
-            "description": str(c.get("description", ""))}
-    q = c.get("quick", {})
-    quick = dict(full, scenes=tuple(q.get("scenes", full["scenes"][:2])),
-                 pulse_points=_pairs(q.get("pulse_points", full["pulse_points"][:1])),
-                 pulse_shapes=_pairs(q.get("pulse_shapes", full["pulse_shapes"][:1]),
-                                     (str, int)),
-                 pulse_tail=float(q.get("pulse_tail", 2.0)),
-                 map_A=tuple(map(float, q.get("map_A", full["map_A"][::4]))),
-                 map_W=tuple(map(float, q.get("map_W", full["map_W"][2:3]))),
-                 map_duration_tail=float(q.get("map_duration_tail", 2.0)),
-                 dt_sweep=tuple(map(float, q.get("dt_sweep", full["dt_sweep"][1:3]))),
-                 dt_case=dict(c["dt_case"]),
-                 dt_tail=float(q.get("dt_tail", 2.0)),
-                 free_duration=float(q.get("free_duration", 3.0)),
-                 max_records=int(q.get("max_records", 1)),
-                 record_tail=float(q.get("record_tail", 2.0)),
-                 record_duration=None,
-                 record_frames=dict(c["record_frames"]),
-                 fracture_cases=_pairs(q.get("fracture_cases", ()),
-                                       (str, str, int, float, float)))
-    return full, quick
-
-
-def _maps_plan(m: dict[str, Any], c: dict[str, Any]) -> dict[str, Any]:
-    """The maps part of a plan: analytic maps (scenes, grid, A and W ranges) and engine maps
-    (scenes, ranges, free-rocking tail [s], measured grid, the fast engines' grid per scene)."""
-    scenes = list(c["scenes"])
-    return {"analytic_scenes": tuple(m.get("analytic_scenes", scenes)),
-            "analytic_grid": tuple(int(v) for v in m.get("analytic_grid", (100, 100))),
-            "analytic_amplitude": str(m.get("analytic_amplitude", "0.5:8")),
-            "analytic_frequency": str(m.get("analytic_frequency", "0.5:10")),
-            "engine_scenes": tuple(m.get("engine_scenes", scenes[:1])),
-            "engine_amplitude": str(m.get("engine_amplitude", "1:8")),
-            "engine_frequency": str(m.get("engine_frequency", "1:10")),
-            "engine_tail": float(m.get("engine_tail", 3.0)),
-            "measured_grid": tuple(int(v) for v in m.get("measured_grid", (12, 12))),
-            "full_grid": tuple(int(v) for v in m.get("full_grid", (100, 100))),
-            "fast_grids": {k: tuple(int(x) for x in v)
-                           for k, v in m.get("fast_grids", {scenes[0]: (6, 6)}).items()}}
-
-
-def read_plan(data: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """(plan, quick plan) of a plan file's data (``kind = "campaign-plan"``; the plan in its
-    ``[campaign]`` table or at the top level). Keys as in ``scenarios/paper-plan.toml``."""
-    c = dict(data.get("campaign", data))
-    c.setdefault("description", data.get("description", ""))
-    return _plans(c)
 
 
 @functools.lru_cache(maxsize=1)
@@ -448,9 +366,6 @@ def catalogue() -> Catalogue:
                         .read_text(encoding="utf-8"))
     x = data["cross_engine"]
     s, o = x["survive"], x["overturn"]
-    full, quick = read_plan(tomllib.loads(
-        (resources.files("rockbench") / "scenarios" / "paper-plan.toml").read_text(
-            encoding="utf-8")))
     return Catalogue(
         pulses=_pairs(x["pulses"], (str, int)), free_phi0=float(x["free_phi0"]),
         nrmse_window=float(x["nrmse_window"]),
@@ -462,26 +377,4 @@ def catalogue() -> Catalogue:
         overturn_fall=float(o["fall"]),
         overturn_thresholds={(r[0], float(r[1]), str(r[2]), int(r[3])): float(r[4])
                              for r in o["thresholds"]["rows"]},
-        plan=full, quick_plan=quick, check_scene=str(data["check"]["scene"]),
         benchmarks=data["benchmarks"])
-
-
-def campaign_plan(quick: bool = False) -> dict[str, Any]:
-    """The grid of the default campaign (a fresh copy): ``scenes``, ``pulse_points`` ((A, W)
-    pairs), ``pulse_shapes`` ((shape, sign) pairs), ``pulse_tail`` [s], ``map_scene``,
-    ``map_A``, ``map_W``, ``map_duration_tail`` [s] (None: pulse + 10 s), ``dt_sweep`` [s],
-    ``dt_case`` (scene, shape, sign, A, W), ``dt_tail`` [s], ``free_phi0`` [alpha],
-    ``free_duration`` [s], ``max_records`` (None: all), ``record_tail`` [s] (None: record +
-    10 s), ``record_duration`` [s] (cap on a record run's length from its start, None: no
-    cap), ``record_frames`` (label -> scene), ``fracture_cases`` ((scene, shape, sign, A, W):
-    hybrid pulse cases where the analytic model fractures the devices).
-
-    ``quick``: a few cases (two scenes, one pulse, a 2 x 2 map, two time steps, shorter
-    runs) for tests and a first look.
-    """
-    p = catalogue().quick_plan if quick else catalogue().plan
-    return {k: dict(v) if isinstance(v, dict) else v for k, v in p.items()}
-
-
-#: The scene of ``rockbench.testing.check_backend``'s runs.
-CHECK_SCENE: str = catalogue().check_scene

@@ -38,7 +38,7 @@ from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from ..errors import ParameterError, RockbenchError
+from ..errors import ParameterError, RockbenchError, RockbenchWarning
 
 __all__ = ["EXECUTORS", "execute", "check_options", "cpu_count", "kept_pools", "local_workers",
            "DASK_CONNECT_TIMEOUT"]
@@ -69,7 +69,7 @@ def local_workers(workers: int | None) -> int:
         return n
     if workers > n:
         warnings.warn(f"--workers {workers} is more than the {n} cores this process may use: "
-                      f"running {n} local worker processes", RuntimeWarning, stacklevel=3)
+                      f"running {n} local worker processes", RockbenchWarning, stacklevel=3)
         return n
     return workers
 
@@ -108,6 +108,10 @@ def _die_with_parent(parent: int) -> None:
     import signal
     import sys
 
+    # Ctrl-C reaches every process of the terminal's group: the parent stops the work (and
+    # these workers) and says so in one line; a worker printing its own KeyboardInterrupt
+    # traceback would bury that line
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         try:
             import ctypes
@@ -251,11 +255,32 @@ def _pool(fn, items: list[Item], size: int, done, show, label, crashed) -> None:
                     kept[workers] = ex
         finished_ok = True
     finally:
-        if kept is None or not finished_ok:
-            # on Ctrl-C: drop the queued items at once (finished ones are already handed over)
-            ex.shutdown(wait=False, cancel_futures=True)
+        if not finished_ok:
+            # Ctrl-C, or a result that could not be kept (a full disk): stop now. Finished
+            # items are already handed over (and stored); the workers' items in flight are
+            # abandoned, their processes ended rather than waited for
+            _terminate(ex)
             if kept is not None:
                 kept.pop(workers, None)
+        elif kept is None:
+            ex.shutdown(wait=False, cancel_futures=True)
+
+
+def _terminate(ex) -> None:
+    """Shut a process pool down without waiting for its running items: cancel the queue, end
+    the worker processes (SIGTERM; they ignore SIGINT) and join them."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        try:
+            p.terminate()
+        except (OSError, AttributeError, ValueError):
+            pass
+    for p in procs:
+        try:
+            p.join(timeout=5)
+        except (OSError, AttributeError, ValueError, AssertionError):
+            pass
 
 
 def _isolated(fn, item: Any, crashed) -> Any:

@@ -18,7 +18,7 @@ from typing import Any, Sequence
 
 import pandas as pd
 
-from ..errors import ParameterError, RockbenchError
+from ..errors import ParameterError, RockbenchError, RockbenchWarning
 
 __all__ = ["MAP_COLUMNS", "MAP_KEY", "COMPACT_EVERY", "tidy_map", "simulated_rows",
            "cell_key", "store_inputs", "read_inputs", "part_files", "open_map_store", "write_part",
@@ -123,8 +123,10 @@ def store_inputs(scene, scene_ref: str, engine: str, settings: dict, method: str
 
 
 def store_error(path: Path, e: OSError, doing: str) -> RockbenchError:
-    return RockbenchError(f"cannot {doing} the map store {path}: {e.strerror or e}; give a "
-                          f"--store in a folder you can write (or make this one writable)")
+    """:func:`rockbench.sweep.store.store_error` for a map store."""
+    from .store import store_error as _error
+
+    return _error(path, e, doing, what="map store")
 
 
 def read_inputs(path: Path) -> dict[str, Any] | str:
@@ -220,7 +222,7 @@ def compact_map_store(path: Path) -> None:
 def _warn(message: str) -> None:
     import warnings
 
-    warnings.warn(message, RuntimeWarning, stacklevel=3)
+    warnings.warn(message, RockbenchWarning, stacklevel=3)
 
 
 def _read_part(p: Path) -> pd.DataFrame | str:

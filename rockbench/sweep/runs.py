@@ -300,20 +300,47 @@ def run_cases(cases: Iterable[Mapping[str, Any]], *, store: str | Path | None = 
     norms = [normalize_case(c) for c in cases]
     ids = [case_id(n) for n in norms]
 
-    done: dict[str, dict[str, Any]] = {}
     directory = None
     if store is not None:
         S.need_pyarrow()
         directory = S.store_dir(store)
-        for rec in S.load_store(directory).to_dict("records"):
+    done, todo = _stored(directory, ids, norms, retry_errors, damaged="quiet")
+    if directory is not None and not todo:   # nothing to write: a read-only store will do
+        done, todo = _stored(directory, ids, norms, retry_errors, damaged="warn")
+    if directory is None or not todo:
+        return _run_todo(directory, done, todo, ids, dict(
+            executor=executor, workers=workers, dask_address=dask_address, progress=progress,
+            batch=batch, on_rows=on_rows, keep=keep))
+    with S.writer_lock(directory, "store"):  # one writer; a second one is refused, named
+        done, todo = _stored(directory, ids, norms, retry_errors, damaged="move")
+        return _run_todo(directory, done, todo, ids, dict(
+            executor=executor, workers=workers, dask_address=dask_address, progress=progress,
+            batch=batch, on_rows=on_rows, keep=keep))
+
+
+def _stored(directory: Path | None, ids: list[str], norms: list[dict[str, Any]],
+            retry_errors: bool, *, damaged: str) -> tuple[dict, dict]:
+    """(rows already in the store by case id, the cases still to run by case id)."""
+    done: dict[str, dict[str, Any]] = {}
+    if directory is not None:
+        for rec in S.load_store(directory, damaged=damaged).to_dict("records"):
             if retry_errors and rec.get("status") == "error":
                 continue
             done[rec["case_id"]] = rec
-
     todo: dict[str, dict[str, Any]] = {}
     for cid, n in zip(ids, norms, strict=True):
         if cid not in done and cid not in todo:
             todo[cid] = n
+    return done, todo
+
+
+def _run_todo(directory: Path | None, done: dict, todo: dict, ids: list[str],
+              how: dict[str, Any]) -> pd.DataFrame:
+    """Run ``todo`` (each row written to the store as it finishes) and return every row of
+    ``ids``; ``how``: run_cases's executor, workers, dask_address, progress, batch, on_rows
+    and keep."""
+    executor, workers, dask_address = how["executor"], how["workers"], how["dask_address"]
+    progress, batch, on_rows, keep = how["progress"], how["batch"], how["on_rows"], how["keep"]
 
     def on_result(cid: str, row: dict[str, Any]) -> None:
         done[cid] = row

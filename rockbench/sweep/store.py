@@ -36,10 +36,11 @@ from typing import Any
 
 import pandas as pd
 
-from ..errors import ParameterError, RockbenchError
+from ..errors import ParameterError, RockbenchError, RockbenchWarning
 
 __all__ = ["key", "canonical", "code_fingerprint", "store_dir", "need_pyarrow", "have_pyarrow",
-           "write_row", "load_store", "compact", "write_payload", "load_payload", "writer_lock"]
+           "write_row", "load_store", "compact", "write_payload", "load_payload", "writer_lock",
+           "store_error", "quarantine"]
 
 
 # =========================================================================================
@@ -150,11 +151,10 @@ class writer_lock:
         except ImportError:  # pragma: no cover - not POSIX: no lock
             return self
         try:
+            self.directory.mkdir(parents=True, exist_ok=True)
             fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         except OSError as e:
-            raise RockbenchError(f"cannot write the {self.what} {self.directory}: "
-                                 f"{e.strerror or e}; give a folder you can write "
-                                 f"(--store)") from None
+            raise store_error(self.directory, e, what=self.what) from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
@@ -182,16 +182,37 @@ class writer_lock:
             self._fd = None
 
 
+def store_error(path: Path, e: OSError, doing: str = "write", what: str = "store"
+                ) -> RockbenchError:
+    """One line for a store that cannot be written (or read): the folder, the system's reason
+    and the remedy (a full disk: free space and run again, the finished work is kept; otherwise
+    a folder you can write)."""
+    import errno
+
+    why = e.strerror or str(e)
+    if e.errno in (errno.ENOSPC, errno.EDQUOT):
+        remedy = ("free some disk space and run the same command again: every finished case "
+                  "is kept in the store and the rerun resumes from it")
+    else:
+        remedy = "give a --store in a folder you can write (or make this one writable)"
+    return RockbenchError(f"cannot {doing} the {what} {path}: {why}; {remedy}")
+
+
 def _atomic(path: Path, write) -> Path:
-    """Call ``write(tmp)`` on a temporary name beside ``path``, then rename it to ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Call ``write(tmp)`` on a temporary name beside ``path``, then rename it to ``path``; an
+    operating-system failure (full disk, read-only folder) is a one-line
+    :func:`store_error` and leaves no temporary file."""
     tmp = path.with_name(f".tmp-{path.stem}-{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix}")
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         write(tmp)
+        os.replace(tmp, path)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        raise store_error(path.parent, e) from None
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-    os.replace(tmp, path)
     return path
 
 
@@ -228,15 +249,43 @@ def _store_files(directory: Path) -> list[Path]:
     return compacted + parts
 
 
-def load_store(store: str | os.PathLike) -> pd.DataFrame:
-    """Every row of a sweep store (one per case id; the latest wins), or an empty frame."""
+def quarantine(directory: Path, f: Path, why: str, *, move: bool, what: str = "store") -> None:
+    """Say (a warning, one line) that file ``f`` of a store cannot be read and that its cases
+    run again; with ``move`` (the writer, who holds the lock) move it to
+    ``directory/_quarantine/``, out of the way of the next readers."""
+    import warnings
+
+    if move:
+        q = directory / "_quarantine"
+        try:
+            q.mkdir(exist_ok=True)
+            os.replace(f, q / f.name)
+        except OSError as e:
+            raise store_error(directory, e, what=what) from None
+        warnings.warn(f"{what} {directory}: {f.name} is unreadable ({why}); moved it to {q} "
+                      f"and its cases run again", RockbenchWarning, stacklevel=3)
+    else:
+        warnings.warn(f"{what} {directory}: skipped {f.name}, which is unreadable ({why}); "
+                      f"its cases run again", RockbenchWarning, stacklevel=3)
+
+
+def load_store(store: str | os.PathLike, *, damaged: str = "warn") -> pd.DataFrame:
+    """Every row of a sweep store (one per case id; the latest wins), or an empty frame. A file
+    that cannot be read is skipped (its cases run again): ``damaged="warn"`` says so in a
+    warning, ``"move"`` (the writer, holding :class:`writer_lock`) also moves it to
+    ``_quarantine/``, ``"quiet"`` says nothing (a caller that reads again as the writer)."""
     need_pyarrow()
     d = store_dir(store)
     frames = []
     for f in _store_files(d):
         try:
             frames.append(pd.read_parquet(f))
-        except Exception:  # an unreadable file: its cases simply run again
+        except ImportError:
+            raise
+        except Exception as e:  # truncated, corrupted, foreign: its cases run again, said
+            if damaged != "quiet":
+                quarantine(d, f, f"{type(e).__name__}: {' '.join(str(e).split())[:100]}",
+                           move=damaged == "move")
             continue
     frames = [f for f in frames if len(f)]
     if not frames:
