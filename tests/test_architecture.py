@@ -31,7 +31,6 @@ import ast
 from functools import cache
 from pathlib import Path
 
-import pytest
 
 import rockbench as rb
 from rockbench.testing import needs_engine

@@ -12,9 +12,11 @@ import pytest
 from scipy.stats import norm
 
 from rockbench.errors import ParameterError
-from rockbench.studies.fragility import (MEASURES, _holm, analyse, bootstrap, fit_lognormal,
-                                 fragility_curve, intensity, parse_scales, peak_test,
-                                 resolve_records, run_fragility)
+from rockbench.studies.ensembles import resolve_records
+from rockbench.studies.fragility import parse_scales, run_fragility
+from rockbench.studies.fragility_stats import (_holm, analyse, bootstrap, fit_lognormal,
+                                               fragility_curve, peak_test)
+from rockbench.studies.intensity import MEASURES, intensity
 from rockbench.scene.motion import Record
 
 

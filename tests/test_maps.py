@@ -13,7 +13,8 @@ import pytest
 import rockbench as rb
 from rockbench.engines import get_backend
 from rockbench.testing import engine_params
-from rockbench.studies.maps import MAP_COLUMNS, load_map, map_agreement, map_cells, run_map
+from rockbench.studies.map_agreement import map_agreement
+from rockbench.studies.maps import MAP_COLUMNS, load_map, map_cells, run_map
 
 GRID = dict(grid=(10, 10), amplitude="1.5:8", frequency="4:10", pulses="symmetric+", tail=0.5)
 ENGINES = engine_params()          # every registered engine; those missing here skip, saying why

@@ -167,7 +167,7 @@ def test_the_map_figure_shows_inferred_cells_as_inferred():
 
 
 def test_boundary_words_say_where_only_one_map_overturns():
-    from rockbench.studies.maps import describe_shift
+    from rockbench.studies.map_agreement import describe_shift
 
     shift = pd.DataFrame({"pulse": ["symmetric"] * 2, "sign": [1, 1], "frequency": [1.0, 3.7],
                           "a_min_a": [2.0, math.nan], "a_min_b": [2.0, 8.0]})

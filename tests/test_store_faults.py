@@ -4,7 +4,6 @@ cells in flight. Analytic backend, tiny grids: seconds."""
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
@@ -20,8 +19,8 @@ import pytest
 import rockbench as rb
 from rockbench.errors import RockbenchWarning
 from rockbench.cli.main import main
-from rockbench.studies.maps import (MAP_COLUMNS, load_map, map_agreement, map_cells, mark_near_boundary,
-                            run_map)
+from rockbench.studies.map_agreement import map_agreement, mark_near_boundary
+from rockbench.studies.maps import MAP_COLUMNS, load_map, map_cells, run_map
 
 CELLS = dict(grid=(3, 2), amplitude="2:8", frequency="4:8", pulses="symmetric+", tail=0.5)
 

@@ -77,7 +77,7 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
             "stress_skipped": {} if sw is None else sw.skipped}
 
 
-def recommendation(advice: pd.DataFrame, scene: str) -> list[str]:
+def recommendation(advice: pd.DataFrame, scene: str = "the structure") -> list[str]:
     """The report's headline: per tolerance, the recommended engine and setting (rank 1 when
     it meets the tolerance), then the others in order, and those that cannot reach it."""
     lines = []

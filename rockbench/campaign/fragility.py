@@ -14,7 +14,8 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
-from ..studies.fragility import ensemble_dir, record_ims, resolve_records, run_fragility
+from ..studies.ensembles import ensemble_dir, record_ims, resolve_records
+from ..studies.fragility import run_fragility
 
 __all__ = ["REPORT_SIZES", "fragility_section", "section_table"]
 

@@ -25,8 +25,9 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
-from ..studies.maps import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement, mark_near_boundary,
-                   reuse_map, run_map)
+from ..studies.map_agreement import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement,
+                                     mark_near_boundary)
+from ..studies.maps import reuse_map, run_map
 
 __all__ = ["engine_axes", "run_maps", "is_fast"]
 

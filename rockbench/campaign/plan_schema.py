@@ -368,7 +368,7 @@ _keys = plan_keys
 
 def _unknown(name: str, known: list[str]) -> str:
     near = difflib.get_close_matches(name, known, n=1)
-    return (f"a key of the plan format (docs/plans.md)"
+    return ("a key of the plan format (docs/plans.md)"
             + (f"; did you mean {near[0]!r}?" if near else f": {', '.join(sorted(known))}"))
 
 

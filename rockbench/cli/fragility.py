@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -88,7 +87,7 @@ def cmd_fragility(args: argparse.Namespace) -> int:
     from ..studies.fragility import run_fragility
     from ..runner import REFERENCE, resolve_engines
 
-    from ..studies.fragility import check_bootstrap
+    from ..studies.fragility_stats import check_bootstrap
 
     load_scene_from(args)                      # a bad scene or --set fails now
     check_bootstrap(args.boot, args.seed, names=("--boot", "--seed"))

@@ -44,7 +44,6 @@ tried.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -54,9 +53,7 @@ from typing import Any
 
 from .common import (CommandLineError, Parser, absent_engine_lines, add_engine_option,
                      one_line_warnings, add_motion_options,
-                     add_quiet_option, add_run_options, add_scene_options, add_setting_option,
-                     arg_count, arg_key_value, arg_names, arg_nonzero, arg_number, arg_positive,
-                     arg_sign, backend_overrides, engine_names, engine_settings, load_scene_from,
+                     add_quiet_option, add_run_options, add_scene_options, arg_count, backend_overrides, engine_names, engine_settings, load_scene_from,
                      motion_from, output_folder, pandas_display, print_json, write_atomic)
 from ..constants import G
 from ..errors import ParameterError, RockbenchError
@@ -431,7 +428,9 @@ def _print_constants(out: str | Path, scenes=None) -> None:
     if Path(out).exists() and not Path(out).is_dir():
         raise ParameterError("--out", str(out), "a folder (it is a file)")
     if not scenes:
-        from ..campaign.run import SCENES as scenes
+        from ..campaign.plan import campaign_plan
+
+        scenes = campaign_plan()["scenes"]
 
     keys = ("alpha", "p", "lambda_ccw", "lambda_cw", "eta_ccw", "eta_cw", "phi_cr_ccw",
             "phi_cr_cw", "phi_fall_ccw", "phi_fall_cw", "phi_fracture_ccw", "phi_fracture_cw")

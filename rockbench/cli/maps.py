@@ -95,7 +95,7 @@ def _with_near_boundary(df, store: Path):
     (its scene and run length are in ``_inputs.json``); otherwise ``df`` unchanged."""
     import re
 
-    from ..studies.maps import mark_near_boundary
+    from ..studies.map_agreement import mark_near_boundary
     from ..scene.scene import Scene
     from ..sweep.map_store import read_inputs
 
@@ -217,7 +217,8 @@ def _set_aside_other_code(store: Path, *, quiet: bool) -> None:
 
 def cmd_map(args: argparse.Namespace) -> int:
     from ..errors import RockbenchError
-    from ..studies.maps import NEAR_BOUNDARY_MARGIN, describe_shift, load_map, map_agreement, run_map
+    from ..studies.map_agreement import NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement
+    from ..studies.maps import load_map, run_map
 
     figure = _figure_path(args.figure)
     if args.compare:

@@ -58,14 +58,13 @@ See ``docs/engines/drake.md`` for the measurements behind the defaults.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
 from ..constants import G
-from ..errors import ParameterError, check_choice, check_range
+from ..errors import check_choice, check_range
 from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, PointForce, net_wrenches
 

@@ -17,7 +17,7 @@ Units: cost in process CPU seconds per simulated second [s/s]; errors relative [
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd

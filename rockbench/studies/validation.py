@@ -49,7 +49,7 @@ from typing import Any
 
 from ..constants import G
 from ..errors import ParameterError
-from .maps import NEAR_BOUNDARY_MARGIN
+from .map_agreement import NEAR_BOUNDARY_MARGIN
 
 __all__ = ["ValidationCase", "validation_set", "candidate_cases", "overturn_threshold",
            "mirror_symmetric",

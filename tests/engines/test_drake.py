@@ -56,7 +56,7 @@ def test_available_reports_the_version():
 def test_unavailable_without_pydrake(monkeypatch):
     """Where Drake is not installed the backend says so instead of raising."""
     monkeypatch.setitem(sys.modules, "pydrake", None)
-    ok, why = DrakeBackend.available()
+    ok, why = DrakeBackend._probe()
     assert not ok and "pydrake does not import" in why
 
 

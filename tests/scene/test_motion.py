@@ -16,7 +16,6 @@ from rockbench.constants import G, G_STANDARD
 from rockbench.errors import ParameterError
 from rockbench.scene.motion import Record, RickerPulse, antisymmetric_beta, make_pulse
 from rockbench.scene.scene import load_scene
-from rockbench.scene.structure import Block, Frame
 
 PAPER = load_scene("paper-asymmetric").structure      # a Frame: the paper's, written out
 HOUSNER = load_scene("housner-block").structure       # a Block
