@@ -493,7 +493,8 @@ def sliding_response(horizontal: GroundMotion, mu: float, vertical: GroundMotion
             status, reason = "invalid", f"{type(exc).__name__}: {exc}"
             break
     if run.lost is not None:
-        status, reason = "lost contact", f"g + a_v <= 0 at t = {run.lost:.9g} s"
+        status, reason = "lost contact", (f"g + a_v <= 0 at t = {run.lost:.9g} s: the block leaves "
+                                          "the ground, outside the model")
     end = run.t if t_end is None else min(run.t, t_end)
     if t_end is None and run.sigma == 0 and run.lost is None and status == "ok":
         end = max(end if math.isfinite(end) else t_motion, t_motion)

@@ -303,6 +303,10 @@ def test_frame_at_rest_and_at_uplift(name):
             assert H / V == pytest.approx(lam, rel=1e-12)
             assert V == pytest.approx(W * (1 + a_v / G), rel=1e-12)
             assert not (r.A.opens or r.B.opens or r.C.opens or r.D.opens)
+            if frame.symmetric:   # the parallelogram: every contact as a block's, tan alpha
+                for c in "ABCD":
+                    assert getattr(r, c).demand == pytest.approx(math.tan(frame.alpha),
+                                                                 rel=1e-12)
 
 
 def test_vertical_acceleration_scales_every_force():

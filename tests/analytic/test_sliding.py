@@ -247,6 +247,19 @@ def test_constant_vertical_acceleration_scales_mu(c):
                                atol=1e-12 * b.summary.max_abs_displacement)
 
 
+def test_smooth_horizontal_with_a_record_vertical():
+    """A pulse with a (constant) vertical record: the integrator between the record's samples,
+    equal to the pulse alone with mu (g + c) / g."""
+    mu, c = 0.2, -0.3 * G
+    h = RickerPulse(0.6 * G, 0.4, "antisymmetric")
+    v = Record(np.linspace(h.t_start, h.t_end, 61), np.full(61, c))
+    a = sliding_response(h, mu, v, t_end=h.t_end)
+    b = sliding_response(h, mu * (G + c) / G, t_end=h.t_end)
+    assert a.summary.slip_episodes == b.summary.slip_episodes >= 2
+    np.testing.assert_allclose(a.history.u, b.history.u, rtol=0,
+                               atol=1e-9 * b.summary.max_abs_displacement)
+
+
 def test_loss_of_contact_linear():
     """a_v falling linearly to -1.5 g over 1 s: g + a_v = 0 at t = 2/3 s; the run stops."""
     h = Record([0.0, 1.0], [0.1 * G, 0.1 * G])
