@@ -35,7 +35,7 @@ def weight(frame) -> float:
     return (frame.mass_left + frame.mass_beam + frame.mass_right) * G
 
 
-# --- the block: closed form -------------------------------------------------------------------------
+# --- the block: closed form -----------------------------------------------------------------------
 def block_closed_form(block, s, phi, phidot, a_g, a_v, phiddot=None):
     """(H, V, phi'') [N, N, rad/s^2]: r = pivot -> G = (s R sin(alpha - s phi),
     R cos(alpha - s phi)); phi'' = 3 (a_g r_y - (g + a_v) r_x) / (4 R^2) (moment about the
@@ -128,7 +128,7 @@ def test_block_centripetal_term():
     assert r.pivot.opens and r.pivot.demand == math.inf
 
 
-# --- the frame: the KKT system of the three bodies ---------------------------------------------------
+# --- the frame: the KKT system of the three bodies ------------------------------------------------
 def _rot(th, v):
     c, s = math.cos(th), math.sin(th)
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])

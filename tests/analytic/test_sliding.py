@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from rockbench.analytic.sliding import (rectangular_pulse_displacement, sliding_response)
+from rockbench.analytic.sliding import rectangular_pulse_displacement, sliding_response
 from rockbench.constants import G
 from rockbench.errors import ParameterError
 from rockbench.scene.motion import GroundMotion, Record, RickerPulse
@@ -169,7 +169,7 @@ def test_record_by_both_paths():
                                atol=1e-10 * exact.summary.max_abs_displacement)
 
 
-# --- thresholds and symmetry ------------------------------------------------------------------------
+# --- thresholds and symmetry ----------------------------------------------------------------------
 @pytest.mark.parametrize("factor", [0.5, 0.999999, 1.0])
 def test_no_slip_at_or_below_the_threshold(factor):
     """max |a_g| <= mu g: no slip (a pulse whose peak only touches mu g does not slide)."""
@@ -233,7 +233,7 @@ def test_energy_balance(path):
     assert work == pytest.approx(diss + kinetic, rel=1e-9)
 
 
-# --- vertical motion ----------------------------------------------------------------------------------
+# --- vertical motion ------------------------------------------------------------------------------
 @pytest.mark.parametrize("c", [-0.35 * G, 0.5 * G])
 def test_constant_vertical_acceleration_scales_mu(c):
     """a_v = c (constant) is exactly mu -> mu (g + c) / g."""
