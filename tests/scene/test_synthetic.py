@@ -238,7 +238,7 @@ def test_ensemble_median_pga_and_pgv_against_nga_west2(default_set):
     """Median PGA and PGV of the 20 records against BSSA14 for the scenario. Tolerance: a
     factor 1.5 (ln 0.41), 2.5 standard errors of the log of a 20-record median (1.25 x 0.45 /
     sqrt(20) = 0.13 for PGA, 0.16 for PGV) plus the model's own offset measured over 100
-    records of another seed (PGA 1.06, PGV 0.85 of BSSA14; RDK10 report agreement with the NGA
+    records of another seed (PGA 1.06, PGV 0.84 of BSSA14; RDK10 report agreement with the NGA
     models at the level of their scatter, not better). Filter frequencies read in rad/s
     instead of Hz break it (checked by hand); a factor pi/2 on Ia (0.8 on the amplitudes)
     would not show at 20 records (``docs/synthetic.md``: measured over 100)."""
@@ -254,10 +254,11 @@ def test_ensemble_median_pga_and_pgv_against_nga_west2(default_set):
 
 def test_ensemble_spectral_shape_against_nga_west2(default_set):
     """Geometric mean of PSA(T) / PGA (5 % damping) against BSSA14's PSA(T) / PGA at 0.2-2 s.
-    Measured over 100 records: 1.03, 0.88, 0.74, 0.83, 0.99 of BSSA14's shape at 0.2, 0.3, 0.5,
-    1, 2 s (the model's spectrum is a little narrower than the NGA median's). Tolerance: a
-    factor 1.5: the largest measured offset (ln 0.30) plus 2.5 standard errors of a 20-record
-    geometric mean of the ratio (sigma_ln about 0.3: 0.17). The shape must also fall with the
+    Measured over 100 records (seed 7): 1.01, 0.92, 0.87, 0.92, 1.15 of BSSA14's shape at 0.2,
+    0.3, 0.5, 1, 2 s. Tolerance: a factor 1.5: the largest measured offset (ln 0.14) plus 2.5
+    standard errors of a 20-record geometric mean of the ratio (sigma_ln about 0.3: 0.17),
+    with room to spare for RDK10's fixed 0.2 Hz high-pass corner, which Su et al. (2024) show
+    distorts the long periods. The shape must also fall with the
     period past 0.3 s as BSSA14's does (a filter frequency off by 2 pi would not)."""
     _, records = default_set
     pga = np.array([r.peak for r in records])
