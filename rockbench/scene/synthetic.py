@@ -183,7 +183,7 @@ class ScenarioEarthquake:
 
     def describe(self) -> str:
         """One line with units: ``M 7.0 strike-slip, R_rup 15 km, V_s30 400 m/s``."""
-        return (f"M {self.magnitude:.2g} {self.fault}, R_rup {self.distance:g} km, "
+        return (f"M {self.magnitude:g} {self.fault}, R_rup {self.distance:g} km, "
                 f"V_s30 {self.vs30:g} m/s")
 
 
