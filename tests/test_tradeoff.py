@@ -221,9 +221,8 @@ def test_the_evidence_stays_within_the_model_no_sliding():
     a slender frame keeps its overturning cases."""
     from rockbench.scene.motion import RickerPulse
     from rockbench.scene.scene import Scene
-    from rockbench.studies.validation import NO_SLIDING_PGA
+    from rockbench.validity import pga_limit
 
-    assert NO_SLIDING_PGA == pytest.approx(9.81)
     squat = Scene.from_dict({"name": "cabinet", "structure": {
         "type": "block", "width": 1.0, "height": 1.6, "depth": 0.8, "density": 900.0}})
 
@@ -239,11 +238,12 @@ def test_the_evidence_stays_within_the_model_no_sliding():
     from rockbench.studies.validation import candidate_cases
 
     strong = [n for g, n in candidate_cases(squat) if " A=" in n
-              and float(n.split("A=")[1]) * math.tan(squat.alpha) * 9.81 > 1.5 * NO_SLIDING_PGA]
+              and float(n.split("A=")[1]) * math.tan(squat.alpha) * 9.81 > 1.5 * pga_limit(squat)]
     assert len(strong) > 10                      # the catalogue has them: the rule is at work
     p, cases = peaks(squat, "default")
-    assert p and max(p) <= NO_SLIDING_PGA
+    assert pga_limit(squat) == pytest.approx(9.81)          # mu = 1: the default friction
+    assert p and max(p) <= pga_limit(squat)
     assert not {c.name for c in cases} & set(strong)
     assert [c for c in cases if c.motion is None]               # free rocking stays
     p, cases = peaks(rb.load_scene("paper-asymmetric"), "default")
-    assert max(p) <= NO_SLIDING_PGA and [c for c in cases if c.kind == "overturn"]
+    assert max(p) <= pga_limit(squat) and [c for c in cases if c.kind == "overturn"]

@@ -211,6 +211,14 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
     t = t0
     phi = phi0
     phid = phid0
+    if intact and mode != 0 and mode * phi0 >= sc[6 + (0 if mode == 1 else 1)]:
+        # released beyond the fracture angle of its direction: the tendons have failed before
+        # the motion starts (the solve_ivp reference's rule)
+        intact = False
+        fractured = True
+        t_frac = t0
+        if want_ev:
+            nev = _push_event(evf, evi, nev, t0, 4, phi0, phid0, phid0, np.nan, mode)
     n_iter = 0
     recent = np.zeros(max(1, window))
     has_last = False       # last impact of the current rocking episode (chatter rule)

@@ -67,7 +67,6 @@ import pandas as pd
 
 from ..constants import G
 from ..errors import ParameterError, check_finite
-from ..scene.mechanism import mechanism
 from ..scene.structure import Block, Frame, check_direction
 from . import rules
 from .dynamics import Dynamics

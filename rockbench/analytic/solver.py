@@ -238,6 +238,12 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     else:
         mode = 0
     t, phi, phid = t0, phi0, phidot0
+    if intact and mode != 0 and mode * phi0 >= ref.fracture_angle[mode]:
+        # released beyond the fracture angle of its direction: a tendon strained past its
+        # fracture strain has failed before the motion starts (every engine breaks it at once)
+        intact, fractured, t_frac = False, True, t0
+        rows.append(dict(t=t0, kind="fracture", phi=phi0, phidot_before=phidot0,
+                         phidot_after=phidot0, eta=math.nan, direction=mode))
     # the last impact of the current rocking episode: time and |post-impact velocity|
     last_impact: tuple[float, float] | None = None
 

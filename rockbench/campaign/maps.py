@@ -25,8 +25,9 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
-from ..studies.map_agreement import (NEAR_BOUNDARY_MARGIN, describe_shift, map_agreement,
+from ..studies.map_agreement import (describe_shift, map_agreement,
                                      mark_near_boundary)
+from ..report.words import agreement_words
 from ..studies.maps import reuse_map, run_map
 
 __all__ = ["engine_axes", "run_maps", "is_fast"]
@@ -92,7 +93,9 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
     """One engine's map of ``sc``: (map or None, grid, where it comes from)."""
     axes = _axes(maps)[1]
     lab = scene_label(sc)
-    if quick:
+    if quick:           # a first look: the fast engines' maps only, on 4 x 4 x 4 cells
+        if not is_fast(eng):
+            return None, (0, 0), "--quick maps the fast engines only"
         g = (4, 4)
         return (run_map(sc, eng, store=store / f"{lab}_{eng}_4x4.parquet",
                         **dict(axes, grid=g), **run), g, "computed now")
@@ -173,24 +176,18 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
             shift = ag["shift"]["shift"].dropna()
             words = describe_shift(ag["shift"], eng)
             rows.append({"scene": lab, "backend": eng, "grid": f"{g[0]}x{g[1]}x4",
-                         "cells": ag["n"], "agree_fraction": ag["fraction"],
-                         "kappa": ag["kappa"],
+                         "cells": ag["n"], "differ": ag["differ"],
+                         "agree_fraction": ag["fraction"], "kappa": ag["kappa"],
                          "engine_overturns_analytic_survives": ag["b_overturns_a_survives"],
                          "analytic_overturns_engine_survives": ag["a_overturns_b_survives"],
                          "boundary_shift_mean": float(shift.mean()) if len(shift) else None,
                          "boundary_shift_max_abs": float(shift.abs().max()) if len(shift)
                          else None,
-                         "not_ok": int((df["status"] != "ok").sum()),
+                         "not_ok": ag["not_ok_first"] + ag["not_ok_second"],
                          "near_boundary": ag["near_boundary"],
                          "disagree_near_boundary": ag["disagree_near_boundary"],
                          "disagree_away": ag["disagree_away"], "in_words": words})
-            out["words"].append(f"{eng} on {lab} ({g[0]}x{g[1]}x4 cells): "
-                                f"{100 * ag['fraction']:.1f} % of the verdicts agree with the "
-                                f"analytic map (Cohen's kappa {ag['kappa']:.3f}); "
-                                f"{ag['near_boundary']} cells lie within "
-                                f"{100 * NEAR_BOUNDARY_MARGIN:g} % in A of the analytic boundary "
-                                f"(near the boundary), {ag['disagree_near_boundary']} differing "
-                                f"verdicts there and {ag['disagree_away']} away from it; "
-                                f"{words}.")
+            out["words"].append(agreement_words(rows[-1], engine=eng, scene=lab)
+                                + f"; {words}.")
     out["agreement"] = pd.DataFrame(rows)
     return out

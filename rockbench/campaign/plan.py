@@ -275,7 +275,6 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
             "record_frames": dict(c["record_frames"]),
             "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float)),
             "choice_scene": str(c.get("choice_scene", c["map_scene"])),
-            "choice_dts": tuple(map(float, c.get("choice_dts", (2e-3, 1e-3, 5e-4)))),
             "choice_evidence": str(c.get("choice_evidence", "quick")),
             "stress_scene": c.get("stress_scene"),
             "stress_hybrid_scene": c.get("stress_hybrid_scene"),

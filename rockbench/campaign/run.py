@@ -406,10 +406,10 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     from .choice import run_choice
 
     choice = run_choice(names, store_dir, quick=quick, full=full, workers=workers,
-                        progress=progress, scene=plan["choice_scene"], dts=plan["choice_dts"],
+                        progress=progress, scene=plan["choice_scene"],
                         stress_scene=plan.get("stress_scene"),
                         stress_hybrid=plan.get("stress_hybrid_scene"),
-                        evidence=plan.get("choice_evidence", "quick"), absent=absent)
+                        evidence=plan.get("choice_evidence", "quick"))
     timings["choice"] = time.perf_counter() - t
 
     # 5: records ----------------------------------------------------------------------------
@@ -468,7 +468,12 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                                 noun="frames" if _all_frames(plan["scenes"]) else "structures")
     # the recommendation first (measured advice, CPU time), then the evidence; the median-
     # based "closest" and the load-dependent "fastest" headlines give way to it
-    lines = choice["words"] + maps["words"] + [
+    from ..report.decision import decision_sentences
+
+    decision = choice.get("decision")
+    words = decision_sentences(choice["advice"], choice.get("scene", "the structure"),
+                               next_steps=decision.next_steps if decision else None)
+    lines = words + maps["words"] + [
         x for x in lines if not x.startswith(("Closest to the analytic model", "Fastest engine"))]
 
     # page -------------------------------------------------------------------------------
@@ -505,8 +510,11 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         choice["advice"], scene=scene_word, structure=plan.get("description", ""),
         structures=None if paper else structure_table(plan["scenes"]),
         agreement=maps["agreement"], eta_summary=eta_summary, breaks=choice.get("breaks"),
+        next_steps=decision.next_steps if decision else None,
         notes=[n for n in [evidence_note(choice.get("tradeoff"),
-                                                   size=choice.get("evidence", "quick"))] if n],
+                                         size=choice.get("evidence", "quick"),
+                                         coverage=decision.coverage if decision else None,
+                                         cpu_s=decision.cpu_s if decision else None)] if n],
         work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
     timings["report"] = time.perf_counter() - t
     total = time.perf_counter() - t_start

@@ -55,17 +55,23 @@ def add_choosing_commands(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the table as JSON")
     add_quiet_option(p)
 
-    p = sub.add_parser("advise", help="the cheapest setting of each engine within a tolerance")
+    p = sub.add_parser("advise", help="the cheapest confirmed engine and setting within "
+                                      "each tolerance")
     add_scene_options(p)
-    p.add_argument("--tolerance", type=arg_positive, required=True, metavar="X",
-                   help="relative bound on the worst validation error (0.02 = 2 %%)")
+    p.add_argument("--tolerance", type=_tolerances, metavar="X[,Y...]",
+                   help="relative bounds on the worst validation error (0.02 = 2 %%), "
+                        "comma-separated (default: 0.1,0.05,0.02,0.005)")
     add_engine_option(p, "every registered engine")
     p.add_argument("--quick", action="store_true",
-                   help="the quick evidence (a subset of the default), one repeat: a first "
-                        "look, with its own held-out error")
+                   help="the quick evidence (a subset of the default): a first answer, with "
+                        "its own held-out error")
     p.add_argument("--full", action="store_true",
                    help="the full evidence and the search of the contact parameters (slow)")
-    p.add_argument("--store", metavar="PATH", help="result store folder (reused on a rerun)")
+    p.add_argument("--budget", type=arg_positive, metavar="CPU_S",
+                   help="the most CPU seconds the search may spend (default: 120 quick, 600 "
+                        "default, none --full); beyond it the answer says what to run next")
+    p.add_argument("--store", metavar="PATH",
+                   help="result store folder, reused on a rerun (default advice/SCENE)")
     p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")
     p.add_argument("--json", action="store_true", help="print the advice as JSON")
     add_quiet_option(p)
@@ -155,6 +161,21 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
     return 0
 
 
+def _tolerances(text: str) -> list[float]:
+    """``--tolerance X[,Y...]``: relative errors in (0, 1)."""
+    out = []
+    for part in text.split(","):
+        try:
+            v = float(part)
+        except ValueError:
+            v = math.nan
+        if not 0.0 < v < 1.0:
+            raise argparse.ArgumentTypeError(f"must be relative errors in (0, 1) such as 0.02 "
+                                             f"(2 %) or 0.1,0.02, got {text!r}")
+        out.append(v)
+    return out
+
+
 def cmd_advise(args: argparse.Namespace) -> int:
     from ..studies.advise import advise
     from .common import print_json
@@ -163,8 +184,11 @@ def cmd_advise(args: argparse.Namespace) -> int:
     full = bool(getattr(args, "full", False))   # --full: the full evidence, contact search
     if args.quick and full:
         raise ParameterError("--quick", True, "not together with --full")
-    a = advise(scene, args.tolerance, engine_names(args), args.store, quick=args.quick,
-               full=full, progress=not args.quiet, **_executor(args))
+    store = args.store or str(Path("advice") / Path(args.scene).stem)
+    a = advise(scene, args.tolerance, engine_names(args), store, quick=args.quick,
+               full=full, progress=not args.quiet,
+               budget_cpu_s=args.budget if args.budget is not None else "auto",
+               **_executor(args))
     if args.json:
         print_json(a.to_json())
     else:

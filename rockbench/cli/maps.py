@@ -148,27 +148,16 @@ def _is_map_store(path: str) -> None:
 
 
 def agreement_words(ag: dict) -> str:
-    """A map agreement in words, its disagreement shown: the cells compared, how many differ,
-    the fraction (never rounded up to 100 % while one differs), kappa, and the cells left out
-    (held by one map only; not ok in either)."""
-    n, differ = ag["n"], ag.get("differ", 0)
-    frac = 100 * ag["fraction"] if n else float("nan")
-    pct = f"{frac:.2f}" if not (differ and frac > 99.99) else f"{frac:.4f}"
-    text = (f"{differ} of {n} cells differ ({pct} % agree), Cohen's kappa "
-            f"{ag['kappa']:.3f}" if ag["kappa"] == ag["kappa"] else
-            f"{differ} of {n} cells differ ({pct} % agree), Cohen's kappa undefined (every "
-            f"cell has one verdict in both maps)")
-    left = []
-    only = ag.get("cells_first", n) - ag.get("common", n), ag.get("cells_second", n) - ag.get(
-        "common", n)
-    if any(only):
-        left.append(f"compared on the {ag.get('common', n)} cells both hold ({only[0]} only in "
-                    f"the first, {only[1]} only in the second)")
-    bad = ag.get("not_ok_first", 0), ag.get("not_ok_second", 0)
-    if any(bad):
-        left.append(f"{bad[0]} + {bad[1]} common cells not ok in the first + second map, left "
-                    f"out")
-    return text + ("; " + "; ".join(left) if left else "")
+    """The words of :func:`rockbench.report.words.agreement_words` for a
+    :func:`~rockbench.studies.map_agreement.map_agreement` result."""
+    from ..report.words import agreement_words as words
+
+    common = ag.get("common", ag["n"])
+    return words({"cells": ag["n"], "differ": ag.get("differ"), "agree_fraction":
+                  ag["fraction"], "kappa": ag["kappa"],
+                  "not_ok": ag.get("not_ok_first", 0) + ag.get("not_ok_second", 0),
+                  "only_first": ag.get("cells_first", common) - common,
+                  "only_second": ag.get("cells_second", common) - common})
 
 
 def _same_structure(first: str, second: str) -> None:

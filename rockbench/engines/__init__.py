@@ -88,7 +88,7 @@ def engine_versions() -> dict[str, str | None]:
     out: dict[str, str | None] = {}
     for name in REGISTRY:
         try:
-            dist = getattr(get_backend(name), "package", name)
+            dist = get_backend(name).package or name
         except BackendUnavailable:
             dist = name
         try:

@@ -23,8 +23,14 @@ A backend is a subclass of :class:`Backend` registered by name in :mod:`rockbenc
     (``benchmarks/results/results.md``): the report gives such engines the larger default map
     grids;
   - ``relative_cost`` (default 1.0) - CPU cost of a run relative to the fast engines, for the
-    order in which campaigns schedule jobs (longest first); from the ``total_s`` column of
-    ``benchmarks/results/results.md``;
+    order in which campaigns schedule jobs (longest first) and searches try engines (cheapest
+    first); from the ``total_s`` column of ``benchmarks/results/results.md``;
+  - ``contact_variants`` (default none) - the contact settings a search may try besides the
+    defaults (``rockbench advise --full``): a tuple of override mappings of ``Settings``
+    fields, each one a variant (those that decide the impact and small uplifts);
+  - ``precision_sweeps`` (default: the time step) - the work-precision curves: a tuple of
+    (knob, values coarse to fine or None for the sweep's time steps, overrides held along it);
+    an error-controlled integrator declares its own knob (e.g. an accuracy);
 
 * ``_probe()`` - classmethod returning ``(True, version)`` or ``(False, why)``: whether the
   engine imports here (it may raise: an exception is a ``(False, why)``). Callers never call it:
@@ -113,6 +119,10 @@ class Backend(abc.ABC):
     batched: ClassVar[bool] = False
     fast: ClassVar[bool] = False
     relative_cost: ClassVar[float] = 1.0
+    contact_variants: ClassVar[tuple[dict[str, Any], ...]] = ()
+    precision_sweeps: ClassVar[tuple] = (("dt", None, {}),)
+    #: The distribution that provides the engine (``rockbench engines``; metadata versions).
+    package: ClassVar[str] = ""
 
     def __init__(self, scene: Scene, settings: Any = None, **overrides: Any):
         if not isinstance(scene, Scene):

@@ -138,6 +138,10 @@ class DrakeBackend(EngineBackend):
     name: ClassVar[str] = "drake"
     package: ClassVar[str] = "drake"
     Settings: ClassVar[type] = DrakeSettings
+    #: The contact settings a search may try (rockbench advise --full; engines/base.py).
+    contact_variants: ClassVar[tuple] = (
+        {"stiffness": 1e11}, {"stiffness": 1e13}, {"dissipation": 10.0}, {"dissipation": 200.0},
+        {"relaxation_time": 1e-4})
 
     #: The work-precision curves (:func:`rockbench.studies.tradeoff.precision_sweeps`): CENIC's
     #: ``accuracy`` (its knob, not dt), coarse to fine, and a fixed-step solver's ``dt`` over

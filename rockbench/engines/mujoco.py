@@ -200,6 +200,10 @@ class MujocoBackend(EngineBackend):
 
     name: ClassVar[str] = "mujoco"
     Settings: ClassVar[type] = MujocoSettings
+    #: The contact settings a search may try (rockbench advise --full; engines/base.py).
+    contact_variants: ClassVar[tuple] = (
+        {"contact_dampratio": 1.0}, {"contact_dampratio": 4.0}, {"impedance": 0.95},
+        {"impedance": 0.999}, {"impratio": 1.0}, {"impratio": 10.0}, {"noslip_iterations": 10})
     batched: ClassVar[bool] = True  # mujoco.rollout: rockbench.engines.mujoco_batch
     fast: ClassVar[bool] = True     # real-time factor 51-164 (benchmarks/results/results.md)
 

@@ -199,6 +199,10 @@ class OpenseesBackend(EngineBackend):
     name: ClassVar[str] = "opensees"
     package: ClassVar[str] = "openseespy"
     Settings: ClassVar[type] = OpenseesSettings
+    #: The contact settings a search may try (rockbench advise --full; engines/base.py).
+    contact_variants: ClassVar[tuple] = (
+        {"toe_stiffness": 1e11}, {"toe_stiffness": 1e12}, {"integrator": "hht", "hht_alpha": 0.9},
+        {"damping": "stiffness"})
 
     @property
     def native_devices(self) -> bool:  # type: ignore[override]

@@ -171,6 +171,11 @@ class PybulletBackend(EngineBackend):
 
     name: ClassVar[str] = "pybullet"
     Settings: ClassVar[type] = PybulletSettings
+    #: The contact settings a search may try (rockbench advise --full; engines/base.py).
+    contact_variants: ClassVar[tuple] = (
+        {"contact_erp": 0.2}, {"contact_erp": 0.02}, {"solver_iterations": 150},
+        {"contact_breaking_threshold": 1e-4}, {"split_impulse": False}, {"split_impulse": True},
+        {"contact_slop": 1e-4}, {"restitution": 0.1})
     # a run's total_s is 1.7-3.8 x MuJoCo's and 1.9-3.6 x pymunk's on the four benchmark cases
     # (benchmarks/results/results.md, 2026-11-22); real-time factor 7-48, not ``fast``
     relative_cost: ClassVar[float] = 2.5

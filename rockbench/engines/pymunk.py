@@ -90,6 +90,10 @@ class PymunkBackend(EngineBackend):
 
     name: ClassVar[str] = "pymunk"
     Settings: ClassVar[type] = PymunkSettings
+    #: The contact settings a search may try (rockbench advise --full; engines/base.py).
+    contact_variants: ClassVar[tuple] = (
+        {"iterations": 60}, {"iterations": 100}, {"collision_slop": 1e-4},
+        {"collision_slop": 1e-3}, {"collision_bias": 0.9 ** 300})
     fast: ClassVar[bool] = True     # real-time factor 44-341 (benchmarks/results/results.md)
 
     @classmethod

@@ -14,7 +14,7 @@ from .tradeoff_figures import plot_stability_map, plot_work_precision
 __all__ = ["choice_html", "work_precision_html", "advice_display"]
 
 #: advice.csv columns that are fractions, shown as percentages.
-_FRACTIONS = ("tolerance", "worst_error", "held_out_worst_error", "chosen_worst_error")
+_FRACTIONS = ("tolerance", "worst_error_choice", "worst_error_heldout")
 
 
 def advice_display(adv: pd.DataFrame) -> pd.DataFrame:
@@ -26,7 +26,7 @@ def advice_display(adv: pd.DataFrame) -> pd.DataFrame:
         if c in out:
             out[c] = [pct(v) for v in out[c]]
     if "status" in out and "setting" in out:
-        out["setting"] = out["setting"].where(out["status"].astype(str) == "meets", "")
+        out["setting"] = out["setting"].where(out["status"].astype(str) != "not installed", "")
     out = out.drop(columns=[c for c in ("dt", "rank") if c in out and "setting" in out])
     names = {c: f"{c.replace('_', ' ')} [%]" for c in _FRACTIONS if c in out}
     names.update({"cpu_per_sim_s": "CPU s per simulated s", "real_time_factor":

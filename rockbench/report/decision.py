@@ -1,13 +1,15 @@
 """The first screen of the campaign page: the decision. One sentence per tolerance (the engine
-and setting to use, at what cost, with what error on the cases the choice never saw), one row
-per engine (its cheapest setting within each tolerance, steady cost, worst errors, map agreement,
-eta error, where it breaks), and the work-precision plot. Reads tables only; everything it says
-is a number from them.
+and setting to use, at what cost, with what error on the cases the choice never saw; or why no
+engine is confirmed, and what to run next), one row per engine (its fate at each tolerance in
+the words of :data:`rockbench.fates.FATES`, its map agreement, eta error, where it breaks), and
+the work-precision plot. Reads tables only; every sentence is rendered from them, so a sentence
+cannot say what its table does not.
 
-Inputs are the campaign's tables (``docs/report.md``): ``advice`` (advice.csv: tolerance,
-engine, status, setting, worst_error, cpu_per_sim_s [, held_out_worst_error]), ``agreement``
-(map_agreement.csv), ``eta_summary`` (eta_summary.csv), ``breaks``
-(stress_breaking_points.csv) and ``tradeoff`` (tradeoff.csv, for the plot).
+Inputs are the campaign's tables (``docs/report.md``): ``advice`` (advice.csv: tolerance, rank,
+engine, status, recommended, setting, worst_error_choice, worst_error_heldout, cpu_per_sim_s,
+reason), ``agreement`` (map_agreement.csv), ``eta_summary`` (eta_summary.csv), ``breaks``
+(stress_breaking_points.csv), ``tradeoff`` (tradeoff.csv, for the plot), and the search's
+``next_steps`` (tolerance -> what to run next) and ``coverage`` (the held-out part's cases).
 """
 
 from __future__ import annotations
@@ -18,19 +20,11 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
+from ..fates import ABSENT, ALMOST, CONFIRMED, FATES
 from ..result import as_float
 
-__all__ = ["decision_sentences", "decision_table", "decision_html", "evidence_note", "pct"]
-
-#: Advice statuses of a setting within the tolerance on the chosen cases that is not
-#: recommended, and why (rockbench.studies.advise.decide).
-_ALMOST = {"unconfirmed": "unconfirmed: no finer step was run, or the finer one misses the "
-                          "tolerance (docs/choosing.md, convergence)",
-           "fails held-out": "it fails on the held-out cases",
-           "lucky steps only": "only at isolated steps: its error is erratic against dt"}
-
-#: Columns that may hold the error on held-out cases, in order of preference.
-_HELD_OUT = ("held_out_worst_error", "heldout_worst_error", "confirm_worst_error")
+__all__ = ["decision_sentences", "decision_table", "decision_html", "evidence_note", "pct",
+           "tol_text"]
 
 
 def pct(x: Any, digits: int = 2) -> str:
@@ -44,59 +38,76 @@ def pct(x: Any, digits: int = 2) -> str:
     return f"{100.0 * v:.{digits}f} %"
 
 
-def _held_out(row: Mapping[str, Any]) -> float:
-    for c in _HELD_OUT:
-        if c in row and not pd.isna(row[c]):
-            return as_float(row[c])
-    return math.nan
+def tol_text(tol: Any) -> str:
+    """A tolerance as the page writes it: "2 %", "0.5 %"."""
+    return f"{100 * float(tol):g} %"
 
 
-def _meets(g: pd.DataFrame) -> pd.DataFrame:
-    return g[g["status"].astype(str) == "meets"]
+def _cost(x: Any) -> str:
+    v = as_float(x)
+    return f"{v:.3g} CPU s per simulated s" if math.isfinite(v) else "cost not measured"
 
 
-def decision_sentences(advice: pd.DataFrame, scene: str) -> list[str]:
-    """One sentence per tolerance: what to use on ``scene``, its cost and errors; or that no
-    engine reaches it and which comes closest."""
+def _by_tolerance(advice: pd.DataFrame):
+    for tol, g in advice.groupby("tolerance", sort=False):
+        yield float(tol), (g.sort_values("rank") if "rank" in g else g)
+
+
+def decision_sentences(advice: pd.DataFrame, scene: str, *,
+                       next_steps: Mapping[float, Mapping[str, Any] | None] | None = None
+                       ) -> list[str]:
+    """One sentence per tolerance, rendered from the advice table: what to use on ``scene``,
+    its cost and errors; or, when none meets it, which engine reaches it without being
+    confirmed and why; "no engine reaches" only when none does; and what to run next
+    (``next_steps``)."""
     out: list[str] = []
     if advice is None or not len(advice):
         return ["No engine besides the analytic reference ran: there is nothing to choose."]
-    for tol, g in advice.groupby("tolerance", sort=False):
-        g = g.sort_values("rank") if "rank" in g else g
-        meets = _meets(g)
+    for tol, g in _by_tolerance(advice):
+        t = tol_text(tol)
+        st = g["status"].astype(str)
+        meets = g[st == CONFIRMED]
         if len(meets):
             b = meets.iloc[0]
-            ho = _held_out(b)
-            conf = (f", {pct(ho)} on held-out cases" if math.isfinite(ho) else "")
-            text = (f"For {pct(tol, 1 if tol < 0.01 else 0)} on {scene}: use {b['engine']} at "
-                    f"{b['setting']} ({as_float(b['cpu_per_sim_s']):.3g} CPU s per simulated s; "
-                    f"worst error {pct(b['worst_error'])} on the chosen cases{conf})")
-            if len(meets) > 1:
-                n = meets.iloc[1]
-                text += (f"; next cheapest: {n['engine']} at {n['setting']} "
-                         f"({as_float(n['cpu_per_sim_s']):.3g} CPU s/s)")
+            text = (f"Within {t} on {scene}: use {b['engine']} at {b['setting']} "
+                    f"({_cost(b['cpu_per_sim_s'])}; worst error {pct(b['worst_error_choice'])} "
+                    f"on the cases it was chosen on, {pct(b['worst_error_heldout'])} on the "
+                    f"held-out ones)")
+            ties = meets.iloc[1:]
+            ties = ties[ties["tie_with_cheapest"].fillna(False).astype(bool)] \
+                if "tie_with_cheapest" in ties else ties.iloc[0:0]
+            if len(ties):
+                text += ("; as cheap within the machine's noise: " + ", ".join(
+                    f"{r['engine']} at {r['setting']}" for _, r in ties.iterrows()))
             out.append(text + ".")
+            continue
+        almost = g[st.isin(ALMOST)]
+        if len(almost):
+            parts = []
+            for _, r in almost.iterrows():
+                if r["status"] == "fails held-out":
+                    parts.append(f"{r['engine']} reaches it at {r['setting']} on the chosen "
+                                 f"cases ({pct(r['worst_error_choice'])}) but misses it on "
+                                 f"the held-out ones ({pct(r['worst_error_heldout'])})")
+                else:
+                    parts.append(f"{r['engine']} reaches it ({pct(r['worst_error_choice'])} "
+                                 f"at {r['setting']}) but is not confirmed: "
+                                 f"{FATES['not converged']}")
+            text = f"Within {t} on {scene}: no engine is confirmed. " + "; ".join(parts)
         else:
-            t = pct(tol, 1 if tol < 0.01 else 0)
-            best = g.assign(_e=g["worst_error"].astype(float)).sort_values("_e")
-            best = best[best["_e"].notna() & (best["_e"] < math.inf)]
-            near = best[best["status"].astype(str).isin(_ALMOST)] if len(best) else best
-            if len(near):
-                b = near.iloc[0]
-                ho = _held_out(b)
-                out.append(f"For {t} on {scene}: no setting is confirmed. {b['engine']} at "
-                           f"{b['setting']} has a worst error of {pct(b['worst_error'])} on the "
-                           "chosen cases" + (f" and {pct(ho)} held out" if math.isfinite(ho)
-                                             else "")
-                           + f", but {_ALMOST[str(b['status'])]}.")
-            elif len(best):
-                b = best.iloc[0]
-                out.append(f"For {t} on {scene}: no engine "
-                           f"reaches it at the settings tried; closest: {b['engine']} "
-                           f"({pct(b['worst_error'])} at {b['setting']}).")
-            else:
-                out.append(f"For {pct(tol, 1 if tol < 0.01 else 0)} on {scene}: no engine "
-                           "reaches it at the settings tried.")
+            ran = g[~st.isin(ABSENT)]
+            fin = ran[pd.to_numeric(ran["worst_error_choice"], errors="coerce").notna()]
+            fin = fin.assign(_e=fin["worst_error_choice"].astype(float)).sort_values("_e")
+            fin = fin[fin["_e"] < math.inf]
+            text = f"Within {t} on {scene}: no engine reaches it at the settings tried"
+            if len(fin):
+                b = fin.iloc[0]
+                text += f"; closest: {b['engine']} ({pct(b['_e'])} at {b['setting']})"
+        nxt = (next_steps or {}).get(tol)
+        if nxt:
+            text += (f". To try next: {nxt['engine']} at {nxt['setting']}, about "
+                     f"{as_float(nxt['cpu_s']):.0f} CPU s")
+        out.append(text + ".")
     return out
 
 
@@ -117,51 +128,54 @@ def _where_it_breaks(breaks: pd.DataFrame | None, engine: str) -> str:
     return "; ".join(parts)
 
 
+def _cell(r: Mapping[str, Any]) -> str:
+    """One engine's fate at one tolerance, short: a page cell."""
+    st = str(r["status"])
+    if st == CONFIRMED:
+        return (f"{r['setting']}: {as_float(r['cpu_per_sim_s']):.3g} CPU s/s "
+                f"({pct(r['worst_error_choice'])} / {pct(r['worst_error_heldout'])})")
+    if st in ABSENT:
+        return st
+    err = as_float(r.get("worst_error_choice"))
+    where = f" {r['setting']}" if isinstance(r.get("setting"), str) else ""
+    return st + (f" ({pct(err)}{where})" if math.isfinite(err) else "")
+
+
 def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = None,
                    eta_summary: pd.DataFrame | None = None,
                    breaks: pd.DataFrame | None = None,
                    scene: str | None = None) -> pd.DataFrame:
-    """One row per engine: for each tolerance its cheapest setting meeting it (or "not
-    reached") with the steady cost [CPU s per simulated s] and worst errors [%], then map
-    agreement [%] and Cohen's kappa on ``scene``'s map, the worst free-rocking eta error [%],
-    and where it first breaks (stability sweep). Values are display strings."""
+    """One row per engine: its fate at each tolerance (a confirmed setting with its steady
+    cost [CPU s per simulated s] and worst errors chosen / held out [%], or the fate's word
+    with its closest error), then map agreement on ``scene``'s map (the cells that differ, the
+    share, Cohen's kappa), the worst free-rocking eta error [%], and where it first breaks.
+    Values are display strings."""
     if advice is None or not len(advice):
         return pd.DataFrame()
-    engines = list(dict.fromkeys(advice["engine"]))
+    engines = list(dict.fromkeys(advice.sort_values(["tolerance", "rank"],
+                                                    ascending=[True, True])["engine"]))
     rows = []
     for e in engines:
         row: dict[str, Any] = {"engine": e}
-        for tol, g in advice[advice["engine"] == e].groupby("tolerance", sort=False):
-            t = pct(tol, 1 if tol < 0.01 else 0)
-            m = _meets(g)
-            if len(m):
-                r = m.iloc[0]
-                ho = _held_out(r)
-                row[f"within {t}"] = (f"{r['setting']}: {as_float(r['cpu_per_sim_s']):.3g} CPU s/s, "
-                                      f"worst {pct(r['worst_error'])}"
-                                      + (f", held-out {pct(ho)}" if math.isfinite(ho) else ""))
-            else:
-                r = g.iloc[0]
-                err = as_float(r.get("worst_error"))
-                st = str(r.get("status", ""))
-                word = st if st in _ALMOST else "not reached"
-                row[f"within {t}"] = (word + (f" (best {pct(err)} at {r['setting']})"
-                                              if math.isfinite(err) and st in _ALMOST else
-                                              f" (best {pct(err)})" if math.isfinite(err)
-                                              else ""))
+        for tol, g in _by_tolerance(advice[advice["engine"] == e]):
+            row[f"within {tol_text(tol)}"] = _cell(g.iloc[0])
         if agreement is not None and len(agreement):
             a = agreement[agreement["backend"] == e]
             if scene is not None and "scene" in a and (a["scene"] == scene).any():
                 a = a[a["scene"] == scene]
             if len(a):
-                row["map agreement"] = (f"{pct(a['agree_fraction'].astype(float).min(), 1)}, "
-                                        f"kappa {a['kappa'].astype(float).min():.3f}")
+                w = a.iloc[a["agree_fraction"].astype(float).argmin()]
+                n, frac = int(as_float(w.get("cells", math.nan)) or 0), as_float(
+                    w["agree_fraction"])
+                differ = int(round(n * (1 - frac))) if n else None
+                row["map agreement"] = (f"{differ} of {n} differ" if differ is not None
+                                        else pct(frac, 1)) + f", kappa {as_float(w['kappa']):.3f}"
             else:
-                row["map agreement"] = "no map (report --full measures it)"
+                row["map agreement"] = "no map here (the maps section says why)"
         if eta_summary is not None and len(eta_summary):
             s = eta_summary[(eta_summary["backend"] == e)]["rel_error"].astype(float).abs()
             if len(s.dropna()):
-                row["free-rocking eta error (worst, every scene)"] = pct(s.max())
+                row["free-rocking eta error (worst)"] = pct(s.max())
         w = _where_it_breaks(breaks, e)
         if w:
             row["breaks first at"] = w
@@ -169,34 +183,44 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
     return pd.DataFrame(rows)
 
 
-def evidence_note(tradeoff: pd.DataFrame | None, *, size: str = "quick") -> str:
+def evidence_note(tradeoff: pd.DataFrame | None, *, size: str = "quick",
+                  coverage: Mapping[str, Any] | None = None, cpu_s: float | None = None) -> str:
     """What the decision rests on: how many cases were chosen on and held out (columns
     n_choice, n_heldout of the work-precision table) of which ``size`` of evidence ("quick",
-    "default", "full"), and what a larger set is."""
+    "default", "full"); the held-out part's ``coverage`` (counted cases, overturning ones,
+    records, near the boundary; a thin part said so); what the search spent (``cpu_s``)."""
     if tradeoff is None or not len(tradeoff) or "n_choice" not in tradeoff:
         return ""
     nc, nh = int(tradeoff["n_choice"].max()), int(tradeoff["n_heldout"].max())
-    more = {"quick": " `rockbench advise SCENE` chooses on the default evidence and `--full` "
-                     "on the full one: a setting confirmed here can still fail there (a "
-                     "small-uplift record is the usual culprit, docs/choosing.md).",
-            "default": " `rockbench advise SCENE --full` chooses on the full evidence and "
-                       "adds a search of the contact settings (docs/choosing.md)."
-            }.get(size, "")
-    return (f"Evidence: the {size} set of the scene's own cases, {nc} to choose on and {nh} "
+    text = (f"Evidence: the {size} set of the scene's own cases, {nc} to choose on and {nh} "
             f"held out to confirm (free rocking, pulses near and away from the boundary, "
-            f"records).{more}")
+            f"records)")
+    if coverage:
+        text += (f"; held out: {coverage['counted']} counted ({coverage['overturning']} "
+                 f"overturning, {coverage['records']} records), {coverage['near_boundary']} "
+                 f"near the boundary (reported, not counted)")
+        if coverage.get("thin"):
+            text += f". Note: {coverage['thin']}"
+    if cpu_s is not None and math.isfinite(cpu_s):
+        text += f". The search spent {cpu_s:.0f} CPU s"
+    more = {"quick": " `rockbench advise SCENE` decides on the default evidence and `--full` "
+                     "on the full one (with a search of the contact settings).",
+            "default": " `rockbench advise SCENE --full` decides on the full evidence and "
+                       "adds a search of the contact settings."}.get(size, "")
+    return text + "." + more
 
 
 def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
                   agreement: pd.DataFrame | None = None,
                   eta_summary: pd.DataFrame | None = None, breaks: pd.DataFrame | None = None,
                   work_precision_html: str = "", notes: Sequence[str] = (),
-                  structures: pd.DataFrame | None = None) -> str:
+                  structures: pd.DataFrame | None = None,
+                  next_steps: Mapping[float, Any] | None = None) -> str:
     """The decision section: sentences, the per-engine table, the work-precision figure;
     ``notes``: lines under the table (e.g. :func:`evidence_note`); ``structures``: the fields
     of the scenes the report is about (``rockbench.campaign.plan.structure_table``), shown
     collapsed under the "About" line."""
-    lead = decision_sentences(advice, scene)
+    lead = decision_sentences(advice, scene, next_steps=next_steps)
     parts = ['<div id="decision">']
     if structure:
         parts.append(f'<p class="lead">About: {escape(structure)}</p>')
@@ -217,11 +241,15 @@ def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
             + "</tr>" for r in tab.itertuples(index=False))
         parts.append(f'<table id="decision-table"><thead><tr>{head}</tr></thead>'
                      f"<tbody>{body}</tbody></table>")
-        parts.append("<p><small>Cost: process CPU seconds per simulated second, steady state "
-                     "(docs/choosing.md); errors: worst relative error against the analytic "
-                     "model; map agreement: share of equal overturning verdicts and Cohen's "
-                     "kappa; breaks: first value along each stability axis where the engine is "
-                     "off by more than 5 %, diverges or is invalid.</small></p>")
+        fates = "; ".join(f"<b>{escape(k)}</b>: {escape(v)}" for k, v in FATES.items())
+        parts.append("<p><small>A cell: the setting, its cost in process CPU seconds per "
+                     "simulated second (steady state) and its worst relative error against the "
+                     "analytic model on the chosen / the held-out cases; otherwise the engine's "
+                     f"fate ({fates}) with its closest error. Map agreement: the cells whose "
+                     "overturning verdict differs from the analytic map's, of those compared, "
+                     "and Cohen's kappa. Breaks: the first value along each stability axis "
+                     "where the engine is not within 5 %, with the reason (docs/choosing.md)."
+                     "</small></p>")
     for n in notes:
         parts.append(f"<p>{escape(n)}</p>")
     parts.append(work_precision_html)

@@ -41,7 +41,7 @@ def maps_html(maps: Mapping[str, Any], figdir, *, analytic_grid: str, axes: str,
             f"{scene}, analytic model (compiled path), {analytic_grid}: the four panels "
             + ("of the paper's Figs. 4-7 " if paper else "") +
             "(symmetric and antisymmetric pulses, both signs) on "
-            f"W = omega_g / p [-] and A = a_g / (g tan alpha) [-].",
+            "W = omega_g / p [-] and A = a_g / (g tan alpha) [-].",
             name=f"map_{scene}_analytic", png_dir=figdir))
     ag = maps.get("agreement")
     if ag is not None and len(ag):

@@ -2,7 +2,8 @@
 
 :func:`tradeoff` runs a fixed **validation set** of a scene
 (:func:`rockbench.studies.validation.validation_set`, re-exported here) with every selected engine at
-every setting (by default the time steps :data:`DEFAULT_DTS`), with
+every setting (by default the one ladder of time steps,
+:data:`rockbench.studies.tradeoff_tables.DT_LADDER`), with
 repeats, and measures
 
 * **accuracy against the analytic reference** (:func:`rockbench.compare.metrics` on every run):
@@ -47,18 +48,15 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 from ..errors import ParameterError
-from .tradeoff_tables import (RUN_COLUMNS, TABLE_COLUMNS, VERDICTS, Tradeoff, runs_frame,
+from .tradeoff_tables import (DT_LADDER, RUN_COLUMNS, TABLE_COLUMNS, VERDICTS, Tradeoff, runs_frame,
                               add_self_consistency, case_error, classify_error, machine_info,
                               precision_sweeps, summarize)
 from .validation import (ValidationCase, _analytic, _scene_from_key,
                          _scene_key, overturn_threshold, validation_set)
 
-__all__ = ["DEFAULT_DTS", "precision_sweeps", "ValidationCase", "validation_set",
+__all__ = ["precision_sweeps", "ValidationCase", "validation_set",
            "overturn_threshold", "Setting", "settings_grid", "tradeoff", "Tradeoff", "summarize",
            "classify_error", "RUN_COLUMNS", "TABLE_COLUMNS", "VERDICTS", "case_error"]
-
-#: Default time steps [s] of the work-precision sweep.
-DEFAULT_DTS: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
 
 #: The clock of the cost: process CPU time (user + system) [s]. A module attribute so that a
 #: test can replace it.
@@ -138,10 +136,10 @@ def parse_setting(text: str) -> dict[str, Any]:
 def settings_grid(engines: Sequence[str], dts: Iterable[float] | None = None,
                   extra: Sequence[Mapping[str, Any] | str] | None = None) -> list[Setting]:
     """Every (engine, setting) of a sweep: each engine at each ``dt`` [s] (default
-    :data:`DEFAULT_DTS`), and each ``extra`` override set (a dict or ``"name=value,..."``,
+    :data:`DT_LADDER`), and each ``extra`` override set (a dict or ``"name=value,..."``,
     optionally ``"engine:name=value"`` for one engine only) at each dt, unless it sets dt
     itself. Settings are validated by the engines when they run."""
-    dts = [float(d) for d in (DEFAULT_DTS if dts is None else dts)]
+    dts = [float(d) for d in (DT_LADDER if dts is None else dts)]
     for d in dts:
         if not (d > 0 and math.isfinite(d)):
             raise ParameterError("dt", d, "> 0 [s]")
@@ -339,13 +337,14 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
              quick: bool = False, self_consistency: str = "grid",
              executor: str = "process", workers: int | None = None, store=None,
              progress: bool = False, cases: Sequence[ValidationCase] | None = None,
-             exact: Sequence[Mapping[str, Any]] | None = None) -> Tradeoff:
+             exact: Sequence[Mapping[str, Any]] | None = None,
+             on_row: Any = None) -> Tradeoff:
     """Measure work-precision on ``scene`` (a Scene, a built-in name or a scene file).
 
     Parameters
     ----------
     engines : backend names (default: every available engine, the analytic model excluded).
-    dts : time steps [s] (default :data:`DEFAULT_DTS`).
+    dts : time steps [s] (default :data:`DT_LADDER`).
     settings : extra override sets (:func:`settings_grid`), e.g. ``["iterations=50"]``.
     repeat : runs of each case (>= 1); the cost is the median over them, with min-max spread.
     quick : the reduced validation set (:func:`validation_set`).
@@ -360,6 +359,7 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
     cases : a validation set to use instead of :func:`validation_set`.
     exact : override sets run as they are, instead of the grid of ``dts`` x ``settings``
         (each for every engine; without dt an engine runs at its default step).
+    on_row : called with each run's row as it finishes here (not for runs the store held).
     """
     from ..runner import REFERENCE, resolve_engines
     from ..scene.scene import load_scene
@@ -415,6 +415,8 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
         if directory is not None and row.get("status") != "error":
             from ..sweep.store import write_payload
             write_payload(directory, k, row)
+        if on_row is not None:
+            on_row(row)
 
     # TODO(pymunk/mujoco threads): every engine here steps on one thread.
     execute(_run_item, todo, on_result=on_result, crashed=_crashed,
@@ -425,7 +427,8 @@ def tradeoff(scene, engines: Sequence[str] | None = None, *, dts: Iterable[float
     for k, it in keyed:
         r = dict(done[k])
         c = it["case"]        # its place in this split (the store keys the physics only)
-        r.update(part=c.part, group=c.group, near_boundary=bool(c.near_boundary))
+        r.update(part=c.part, group=c.group, near_boundary=bool(c.near_boundary),
+                 measure=c.measure, peak_ref=float(c.peak_ref))
         r["_setting"] = it["setting"]
         r["_shown"] = it["setting"] in shown
         runs.append(r)

@@ -20,9 +20,13 @@ import pandas as pd
 if TYPE_CHECKING:
     from .validation import ValidationCase
 
-__all__ = ["VERDICTS", "precision_sweeps", "case_error", "classify_error", "RUN_COLUMNS",
+__all__ = ["DT_LADDER", "VERDICTS", "precision_sweeps", "case_error", "classify_error", "RUN_COLUMNS",
            "runs_frame", "add_self_consistency", "curve_of",
            "TABLE_COLUMNS", "summarize", "Tradeoff", "machine_info"]
+
+#: The one ladder of engine time steps [s], coarse to fine: what a work-precision sweep, a
+#: search (``rockbench advise``, the report) and a precision curve of dt run by default.
+DT_LADDER: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
 
 #: Classes of agreement with the analytic model, best first (``verdict`` columns of the
 #: tradeoff, advise and stress tables). "outside model" is used by :mod:`rockbench.studies.robustness` only.
@@ -38,8 +42,7 @@ def precision_sweeps(engine: str) -> tuple:
     from ..engines import get_backend
 
     try:
-        return tuple(getattr(get_backend(engine), "precision_sweeps", None)
-                     or (("dt", None, {}),))
+        return tuple(get_backend(engine).precision_sweeps)
     except Exception:      # an unavailable engine: the runs report it
         return (("dt", None, {}),)
 
@@ -48,8 +51,11 @@ def precision_sweeps(engine: str) -> tuple:
 # Errors and classes
 # =========================================================================================
 def case_error(row: Mapping[str, Any]) -> float:
-    """The validation error [-] of one run row (see the module docstring): |peak error| of a
-    surviving pulse, the largest eta error of a free-rocking run, for a record the relative
+    """The validation error [-] of one run row (see the module docstring), by the case's
+    well-conditioned measure (``measure``, :data:`rockbench.studies.validation.MEASURES`):
+    |peak error| of a surviving pulse, the largest eta error of a free-rocking run without
+    devices, the RMS of (phi - phi_ref) / alpha over |phi0| / alpha (``peak_ref``) of one with
+    devices, for a record the relative
     distance of its peak to the analytic model's own sensitivity band (0 inside it: the model
     cannot claim a peak better than that; a record outside its band by more than the tolerance
     is not ok), 0 for an overturning case; infinite when the run is not ok or gets the
@@ -66,6 +72,13 @@ def case_error(row: Mapping[str, Any]) -> float:
     if near:
         return math.nan
     kind = row.get("kind")
+    measure = row.get("measure")
+    if measure == "history":
+        # free rocking with devices: the history, relative to the initial amplitude (the eta
+        # of a damped impact measures the damper's timing, not the engine)
+        amp = float(row.get("peak_ref") or math.nan)
+        v = abs(float(row.get("nrmse", math.nan))) / amp if amp > 0 else math.nan
+        return v if math.isfinite(v) else math.inf
     if kind == "record":
         # beyond the analytic model's own sensitivity band: the relative distance of the peak
         # to the band's nearest edge (0 inside); without a band, the peak error
@@ -108,7 +121,10 @@ RUN_COLUMNS: dict[str, str] = {
     "kind": "-, free | survive | overturn | record",
     "part": "-, choice | held-out (the case's part of the evidence)",
     "group": "-, the case's group: free | away:<pulse> | near | overturn | record",
-    "near_boundary": "-, a pulse cell within NEAR_MARGIN of the analytic overturning threshold",
+    "near_boundary": "-, a pulse cell within NEAR_MARGIN of the analytic overturning "
+                     "threshold, or a case whose analytic verdict flips within its band",
+    "measure": "-, the case's measure: eta | history | peak | band | verdict",
+    "peak_ref": "-, analytic max|phi| / alpha of the case (free rocking: phi0 / alpha)",
     "status": "-, ok | diverged | invalid | error (error: an exception, see reason)",
     "reason": "-, why a run is not ok",
     "peak_rel_error": "-, max|phi| / max|phi_ref| - 1 against the analytic reference",

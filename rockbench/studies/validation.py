@@ -18,12 +18,25 @@ the analytic model, and split into a **choice** part and a **held-out** part.
   phases of small uplift, where soft contacts swallow small rockings (a record whose analytic
   peak stays below :data:`MIN_PEAK` alpha is left out).
 
-Every case lies within the analytic model: its pivots never slide. A case whose peak ground
-acceleration exceeds :data:`NO_SLIDING_PGA` (mu g with mu = 1, the engines' default friction:
-beyond it a base slides under the ground's own acceleration, whatever it rocks) is left out like
-a case below MIN_PEAK, and the next in order taken: a squat structure that needs more than 1 g
-to overturn has no overturning cases in its evidence, and an engine whose base slides there is
-not judged against a model that cannot slide.
+Every case lies within the analytic model: its pivots never slide. A case outside it by the
+one validity rule (:func:`rockbench.validity.motion_validity`: a peak ground acceleration beyond
+mu g, where a base slides under the ground's own acceleration whatever it rocks) is never
+evidence: it is left out like a case below MIN_PEAK, and the next in order taken. A squat
+structure that needs more than mu g to overturn has no overturning cases in its evidence.
+
+Every case is labelled by its own conditioning, whatever its kind:
+
+* **near the boundary** (``near_boundary``): a pulse cell within :data:`NEAR_MARGIN` of the
+  analytic overturning threshold, or any pulse or record whose analytic verdict flips within
+  its own sensitivity band (:func:`rockbench.studies.sensitivity.band`: eta, pivots and the
+  motion perturbed by what no one can claim to know better). Its verdict is reported, never
+  counted: it would decide nothing about an engine;
+* **the measure** (``measure``) that is well-conditioned for it: free rocking of a structure
+  without devices is judged by eta of each impact; free rocking *with* devices by its history
+  (the relative RMS of phi against the reference, over the initial amplitude), because the eta
+  of a damped impact measures the damper's timing, not the engine; a surviving pulse by its
+  peak; a record by the distance of its peak to the model's sensitivity band; an overturning
+  case by its verdict.
 
 On a mirror-symmetric structure (equal thresholds, restitution and fall angles both ways) a
 case and its sign-flipped twin are the same physics: only the positive sign is kept.
@@ -49,12 +62,22 @@ from typing import Any
 
 from ..constants import G
 from ..errors import ParameterError
+from ..validity import motion_validity
 from .map_agreement import NEAR_BOUNDARY_MARGIN
 
 __all__ = ["ValidationCase", "validation_set", "candidate_cases", "overturn_threshold",
            "mirror_symmetric",
            "uplift_threshold", "SIZES", "GROUP_SIZES", "NEAR_MARGIN", "W_GRID", "SEED",
-           "NO_SLIDING_PGA"]
+           "MEASURES"]
+
+#: The measure of a case (``ValidationCase.measure``): what its error is.
+MEASURES = {"eta": "largest |eta / eta_ref - 1| over the impacts (free rocking, no devices)",
+            "history": "RMS of (phi - phi_ref) / alpha over the run, divided by |phi0| / alpha "
+                       "(free rocking with devices)",
+            "peak": "|max|phi| / max|phi_ref| - 1| (a surviving pulse)",
+            "band": "relative distance of the peak to the analytic sensitivity band, 0 inside "
+                    "(a record)",
+            "verdict": "the overturning verdict (an overturning case: 0 when it agrees)"}
 
 # The design (the analytic model chooses the cells; see the module docstring)
 W_GRID = (1.5, 2.0, 3.0, 4.0, 6.0, 8.0)
@@ -70,10 +93,6 @@ OVER_LEVEL = 1.3                     # x A_ov
 #: about 1e-3 alpha as no uplift at all, and a relative peak error of a response of a few
 #: thousandths of alpha measures the contact's compliance, not the rocking.
 MIN_PEAK = 0.05
-#: Largest peak ground acceleration [m/s^2] of a case: mu g with mu = 1 (the engines' default
-#: Coulomb friction, ``rockbench.engines.base.Settings.friction``). The analytic model assumes
-#: pivots that never slide; a stronger motion slides a base whatever it rocks.
-NO_SLIDING_PGA = 1.0 * G
 _FREE_PHI0 = (0.1, 0.3, 0.7)         # x alpha, both directions
 RECORD_FACTORS = (1.3, 2.0, 3.0)     # x the uplift PGA g min|lambda|
 _RECORD_DURATION = 15.0              # s from the record's start
@@ -107,8 +126,12 @@ class ValidationCase:
     fall : fall angle [rad] of the run (None: the scene's own);
     peak_ref : analytic max |phi| / alpha [-];
     group : the case's group (module docstring); part : "choice" or "held-out";
-    near_boundary : A within :data:`NEAR_MARGIN` of the analytic overturning threshold;
-    a_ratio : A / A_ov [-] of a pulse cell (NaN otherwise); rank : place in its group's order.
+    near_boundary : A within :data:`NEAR_MARGIN` of the analytic overturning threshold, or
+        the analytic verdict flips within the case's own sensitivity band;
+    a_ratio : A / A_ov [-] of a pulse cell (NaN otherwise); rank : place in its group's order;
+    measure : the well-conditioned measure of its error (:data:`MEASURES`);
+    verdict_agreement : fraction of the sensitivity band's perturbed runs with the unperturbed
+        verdict [-] (NaN: not computed, free rocking).
     """
 
     kind: str
@@ -123,6 +146,8 @@ class ValidationCase:
     near_boundary: bool = False
     a_ratio: float = math.nan
     rank: int = 0
+    measure: str = "peak"
+    verdict_agreement: float = math.nan
 
     def motion_spec(self) -> dict[str, Any] | None:
         return None if self.motion is None else dict(self.motion)
@@ -145,7 +170,10 @@ class ValidationCase:
              "phi0": self.phi0, "duration": self.duration, "fall": self.fall,
              "peak_ref": None if not math.isfinite(self.peak_ref) else self.peak_ref,
              "group": self.group, "part": self.part, "near_boundary": self.near_boundary,
-             "a_ratio": None if not math.isfinite(self.a_ratio) else self.a_ratio}
+             "a_ratio": None if not math.isfinite(self.a_ratio) else self.a_ratio,
+             "measure": self.measure,
+             "verdict_agreement": (None if not math.isfinite(self.verdict_agreement)
+                                   else self.verdict_agreement)}
         return d
 
 
@@ -324,7 +352,8 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
     if desc["kind"] == "free":
         phi0 = desc["s"] * desc["f"] * scene.alpha
         return ValidationCase("free", name, None, phi0, round(_free_duration(scene, phi0), 3),
-                              None, desc["f"])
+                              None, desc["f"],
+                              measure="history" if scene.has_devices else "eta")
     if desc["kind"] == "pulse":
         fall = _fall(scene)
         sc = scene.replace(fall_angle=fall)
@@ -332,34 +361,48 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
         ratio = A / desc["A_ov"]
         near = abs(ratio - 1.0) <= NEAR_MARGIN
         p = _pulse(sc, A, W, shape, sign)
-        if p.peak > NO_SLIDING_PGA:              # outside the model: its pivots would slide
+        if not motion_validity(sc, p):           # outside the model: its base would slide
             return None
         dur = _pulse_duration(p, _OVER_TAIL if (near or ratio > 1) else _AWAY_TAIL)
         r = _analytic(sc, p, dur, compiled=True)
         if not r.summary.uplifted or r.summary.max_abs_phi_over_alpha < MIN_PEAK:
             return None
         kind = "overturn" if r.summary.overturned else "survive"
+        agree = _verdict_agreement(sc, p, dur)
         spec = (("A", A), ("W", W), ("kind", "ricker"), ("shape", shape), ("sign", sign))
         return ValidationCase(kind, name, spec, 0.0, dur, fall,
-                              float(r.summary.max_abs_phi_over_alpha), near_boundary=near,
-                              a_ratio=round(ratio, 4))
+                              float(r.summary.max_abs_phi_over_alpha),
+                              near_boundary=near or agree < 1.0, a_ratio=round(ratio, 4),
+                              measure="verdict" if kind == "overturn" else "peak",
+                              verdict_agreement=agree)
     from ..scene.motion import motion_from_spec
 
-    if desc["pga_target"] > NO_SLIDING_PGA:      # outside the model: its pivots would slide
-        return None
     spec = {"kind": "record", "path": desc["path"], "scale": 1.0}
     rec = motion_from_spec(spec, scene.structure)
     scale = round(desc["s"] * desc["pga_target"] / rec.peak, 4)
     spec["scale"] = scale
     rec = rec.scaled(scale)
+    if not motion_validity(scene, rec):          # outside the model: its base would slide
+        return None
     dur = round(min(_RECORD_DURATION, rec.t_end - rec.t_start), 3)
     r = _analytic(scene, rec, dur, compiled=True)
     if not r.summary.uplifted or r.summary.max_abs_phi_over_alpha < MIN_PEAK:
         return None
-    kind = "overturn" if r.summary.overturned else "record"
-    return ValidationCase("record" if kind == "record" else "overturn", name,
+    agree = _verdict_agreement(scene, rec, dur)
+    over = bool(r.summary.overturned)
+    return ValidationCase("overturn" if over else "record", name,
                           tuple(sorted(spec.items())), 0.0, dur, None,
-                          float(r.summary.max_abs_phi_over_alpha))
+                          float(r.summary.max_abs_phi_over_alpha), near_boundary=agree < 1.0,
+                          measure="verdict" if over else "band", verdict_agreement=agree)
+
+
+def _verdict_agreement(scene, motion, duration: float) -> float:
+    """The fraction of the case's sensitivity-band runs (:mod:`rockbench.studies.sensitivity`)
+    whose overturning verdict is the unperturbed one [-]: below 1, the case's own verdict is
+    uncertain (near the boundary, whatever its kind)."""
+    from .sensitivity import band
+
+    return float(band(scene, motion, duration=duration).verdict_agreement)
 
 
 def candidate_cases(scene) -> list[tuple[str, str]]:
