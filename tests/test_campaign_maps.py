@@ -104,7 +104,7 @@ def test_the_choice_part_takes_the_plans_evidence(monkeypatch, tmp_path):
     class Stop(Exception):
         pass
 
-    def validation_set(scene, size):
+    def validation_set(scene, size, **kw):
         seen.append(size)
         raise Stop
 
