@@ -22,7 +22,7 @@ from pathlib import Path
 import pandas as pd
 
 import rockbench as rb
-from rockbench.compare import metrics
+from rockbench.comparison import metrics
 from rockbench.scene.motion import motion_from_spec
 from rockbench.sweep.cases import catalogue
 

@@ -14,7 +14,7 @@ against the analytic backend, and prints one Markdown row per setting:
   over the impacts after which the structure rocks counterclockwise / clockwise; and the
   largest absolute one over every scene;
 * nrmse: largest RMS of (phi_engine - phi_analytic) / alpha over the first 2 s [-]
-  (``rockbench.compare.history_error``, on the reference's time grid);
+  (``rockbench.comparison.history_error``, on the reference's time grid);
 * peak err %: largest |max|phi|_engine / max|phi|_analytic - 1| over the surviving pulses of
   each scene (bare asymmetric frame / hybrid eps_f = 1 %), and over both;
 * OT: overturning pulses that overturned in the engine / all;
@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 
 import rockbench as rb
-from rockbench.compare import history_error
+from rockbench.comparison import history_error
 from rockbench.sweep.cases import catalogue
 
 CASES = catalogue()

@@ -35,6 +35,7 @@ _LAZY: dict[str, str] = {
                     ".scene"),
     "Result": ".result",
     **dict.fromkeys(("run", "info"), ".runner"),
+    **dict.fromkeys(("compare", "Comparison"), ".comparison"),
     **dict.fromkeys(("get_backend", "backend_names", "available_backends", "engine_info"),
                     ".engines"),
     **dict.fromkeys(("plot_history", "plot_map", "plot_work_precision"), ".plotting"),
@@ -42,7 +43,7 @@ _LAZY: dict[str, str] = {
 
 __all__ = ["Block", "Frame", "Devices", "Scene", "GroundMotion", "RickerPulse", "Record",
            "Result", "load_scene", "save_scene", "load_record", "builtin_scenes", "make_pulse", "run", "info",
-           "get_backend", "backend_names", "available_backends", "engine_info",
+           "compare", "Comparison", "get_backend", "backend_names", "available_backends", "engine_info",
            "RockbenchError", "ParameterError", "SceneError", "RecordError", "plot_history",
            "plot_map", "plot_work_precision", "__version__"]
 
@@ -64,6 +65,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # what static tools see (the same names, imported eagerly)
     from .engines import available_backends, backend_names, engine_info, get_backend
     from .plotting import plot_history, plot_map, plot_work_precision
+    from .comparison import Comparison, compare
     from .result import Result
     from .runner import info, run
     from .scene import (Block, Devices, Frame, GroundMotion, Record, RickerPulse, Scene,

@@ -7,7 +7,7 @@ takes ``name`` from. Then:
 
 * the report reads Results and tables only: ``rockbench.report.*`` imports nothing from
   ``engines``, ``scene``, ``sweep``, ``runner`` or ``campaign``;
-* ``rockbench.compare`` imports no backend module, and nothing of the runner, the engines or
+* ``rockbench.comparison`` imports no backend module, and nothing of the runner, the engines or
   the scenes at module level (so that the report may import it);
 * backend adapters never import each other;
 * ``rockbench.scene.*`` imports nothing above it;
@@ -167,9 +167,9 @@ ADAPTERS = sorted({spec.split(":")[0] for spec in REGISTRY.values()
 # -----------------------------------------------------------------------------------------
 def test_the_import_graph_sees_imports():
     """The collector itself: relative imports resolved, names of the top package mapped."""
-    assert "rockbench.result" in imports("rockbench.compare")
-    assert "rockbench.runner" in imports("rockbench.compare")          # inside compare()
-    assert "rockbench.runner" not in imports("rockbench.compare", top_only=True)
+    assert "rockbench.result" in imports("rockbench.comparison")
+    assert "rockbench.runner" in imports("rockbench.comparison")          # inside compare()
+    assert "rockbench.runner" not in imports("rockbench.comparison", top_only=True)
     assert top_level_names()["run"] == "rockbench.runner"
     assert len(ADAPTERS) >= 4 and "rockbench.engines.pymunk" in ADAPTERS
 
@@ -183,14 +183,14 @@ def test_report_reads_results_and_tables_only():
 
 
 def test_compare_imports_no_backend():
-    bad = sorted(f"rockbench.compare imports {i}" for i in imports("rockbench.compare")
+    bad = sorted(f"rockbench.comparison imports {i}" for i in imports("rockbench.comparison")
                  if under(i, *ADAPTERS))
     assert not bad, "\n".join(bad)
 
 
 def test_importing_compare_imports_no_runner_engine_or_scene():
     """What the report may import must not pull the runner, the engines or the scenes in."""
-    bad = violations("rockbench.compare", ("rockbench.runner", "rockbench.engines",
+    bad = violations("rockbench.comparison", ("rockbench.runner", "rockbench.engines",
                                            "rockbench.scene"), top_only=True)
     assert not bad, "\n".join(bad)
 
@@ -202,7 +202,7 @@ def test_backends_never_import_each_other():
 
 
 def test_scene_imports_nothing_above_it():
-    above = tuple(f"rockbench.{p}" for p in ("analytic", "engines", "runner", "compare",
+    above = tuple(f"rockbench.{p}" for p in ("analytic", "engines", "runner", "comparison",
                                              "sweep", "campaign", "studies", "report", "testing",
                                              "cli"))
     bad = violations("rockbench.scene", above)
@@ -250,11 +250,6 @@ ENGINE_NAMES = ("pymunk", "mujoco", "pybullet", "opensees", "drake")
 
 #: Known exceptions to "no engine name outside engines/", (module, name) -> why.
 ENGINE_NAME_ALLOWED = {
-    # the advice's per-engine notes (being rewritten by another engineer, issue 23 advice)
-    ("rockbench.studies.advise", "mujoco"): "advice text keyed by engine; to move to the backends",
-    ("rockbench.studies.advise", "pybullet"): "advice text keyed by engine; to move to the backends",
-    ("rockbench.studies.advise", "pymunk"): "advice text keyed by engine; to move to the backends",
-    ("rockbench.studies.advise", "opensees"): "advice text keyed by engine; to move to the backends",
     # the report's fixed colour per engine: the report may not import engines/
     ("rockbench.report.figures", "pymunk"): "a colour per engine; the report reads no engine",
     ("rockbench.report.figures", "mujoco"): "a colour per engine; the report reads no engine",
@@ -421,13 +416,13 @@ def test_engine_names_catches_a_planted_dispatch():
 
 
 def test_private_imports_catches_a_planted_one():
-    src = _tree("from ..compare import _peak, metrics\n"
+    src = _tree("from ..comparison import _peak, metrics\n"
                 "from .loop import _private_helper\n"
                 "def f():\n"
                 "    from ..scene.records import _bundled_dir\n"
-                "from ..compare import __all__\n")
+                "from ..comparison import __all__\n")
     assert private_imports("rockbench.engines.mujoco", src, packages=set()) == [
-        "rockbench.compare:_peak", "rockbench.scene.records:_bundled_dir"]
+        "rockbench.comparison:_peak", "rockbench.scene.records:_bundled_dir"]
     # the same names within one package are allowed
     assert private_imports("rockbench.scene.motion",
                            _tree("from .records import _bundled_dir\n"), packages=set()) == []

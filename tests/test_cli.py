@@ -385,7 +385,7 @@ def test_compare_table(tmp_path, capsys):
 
 @needs_pymunk
 def test_compare_settings_reach_the_backend(capsys, monkeypatch):
-    import rockbench.compare as compare_mod
+    import rockbench.comparison as compare_mod
 
     seen = {}
     real = compare_mod.compare
@@ -455,8 +455,8 @@ def test_a_broken_compare_module_fails_loudly(monkeypatch):
     real_import = builtins.__import__
 
     def broken(name, globals=None, locals=None, fromlist=(), level=0):
-        if level == 2 and name == "" and fromlist and "compare" in fromlist:
-            raise ImportError("simulated: rockbench.compare is broken")
+        if level == 2 and name == "" and fromlist and "comparison" in fromlist:
+            raise ImportError("simulated: rockbench.comparison is broken")
         return real_import(name, globals, locals, fromlist, level)
 
     monkeypatch.setattr(builtins, "__import__", broken)

@@ -1,4 +1,4 @@
-"""rockbench.compare: metrics against the analytic reference, one case across backends."""
+"""rockbench.comparison: metrics against the analytic reference, one case across backends."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 
 import rockbench as rb
 from rockbench.analytic.reference import Reference
-from rockbench.compare import (ETA_COLUMNS, METRIC_COLUMNS, REFERENCE, Comparison, compare,
+from rockbench.comparison import (ETA_COLUMNS, METRIC_COLUMNS, REFERENCE, Comparison, compare,
                                eta_rows, metrics)
 from rockbench.engines import REGISTRY, available_backends
 
@@ -96,7 +96,7 @@ def test_engine_history_is_interpolated_onto_the_reference_grid(ref):
 def test_metrics_stop_at_the_earlier_end(ref):
     """A run that stops early (overturned) is compared until it stops, not padded: a large
     difference after its end is never seen."""
-    from rockbench.compare import history_error
+    from rockbench.comparison import history_error
 
     half = len(ref.history) // 2
     phi = ref.history["phi"].to_numpy().copy()
@@ -272,3 +272,18 @@ def test_fracture_metrics(fracture_run, ref):
     # a scene without devices never fractures: the metrics say so, and agree
     row = metrics(ref, ref)
     assert row["fractured"] is False and row["fracture_agrees"] is True
+
+
+def test_compare_is_a_function_of_the_package_and_a_comparison_reads_well():
+    """`rb.compare(...)` is the function (the module is rockbench.comparison), and a
+    Comparison's repr is one line per backend, not the whole scene."""
+    import rockbench as rb
+    import rockbench.comparison  # noqa: F401 - importing the module must not shadow it
+
+    assert callable(rb.compare) and rb.compare is rockbench.comparison.compare
+    sc = rb.load_scene("housner-block")
+    c = rb.compare(sc, None, engines=["analytic"], phi0=0.05, duration=0.5)
+    text = repr(c)
+    assert text.startswith("<Comparison of 1 backends on 'housner-block' (free rocking")
+    assert "analytic: ok" in text and "Block(" not in text and len(text) < 300
+    assert "<table" in c._repr_html_()

@@ -669,7 +669,7 @@ def test_fuzz_api_files_slow(data, tmp_path_factory):
 
 
 def api_compare_and_map_test(data):
-    from rockbench.compare import compare
+    from rockbench.comparison import compare
     from rockbench.sweep.runs import run_case
 
     scene = rb.load_scene("housner-block")

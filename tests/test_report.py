@@ -20,7 +20,7 @@ import pandas as pd
 import pytest
 
 import rockbench as rb
-from rockbench.compare import ETA_COLUMNS, METRIC_COLUMNS, TOLERANCES, compare
+from rockbench.comparison import ETA_COLUMNS, METRIC_COLUMNS, TOLERANCES, compare
 from rockbench.campaign import run as C
 from rockbench.report import case_page as P
 from rockbench.report import figures as F

@@ -169,7 +169,7 @@ def _check_page(page: Path, tmp: Path) -> dict:
 
 @pytest.fixture(scope="module")
 def case_page(tmp_path_factory):
-    from rockbench.compare import compare
+    from rockbench.comparison import compare
     from rockbench.report import write_case_report
 
     engines = [e for e in ("pymunk",) if e in rb.available_backends()]

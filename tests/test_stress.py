@@ -134,7 +134,7 @@ def test_a_users_scene_is_its_own_base():
 def test_a_wrong_verdict_is_said_in_words(monkeypatch):
     """An engine whose verdict differs from the analytic one is "off" with error inf, and its
     flags say which way (a breaking point read "error inf" before)."""
-    import rockbench.compare as C
+    import rockbench.comparison as C
 
     real = C.metrics
 

@@ -116,7 +116,7 @@ def test_runs_of_another_case_are_refused(ref):
 def test_assert_agree_defaults_are_the_tolerance_table():
     import inspect
 
-    from rockbench.compare import TOLERANCES
+    from rockbench.comparison import TOLERANCES
 
     sig = inspect.signature(assert_agree).parameters
     assert {k: sig[k].default for k in TOLERANCES["assert_agree"]} == TOLERANCES["assert_agree"]
@@ -322,7 +322,7 @@ def test_user_example_is_the_one_in_the_docs():
 def test_plugin_import_is_cheap():
     code = ("import sys, rockbench.testing.plugin; "
             "print(sorted(m for m in ('pymunk', 'mujoco', 'pybullet', 'scipy', "
-            "'rockbench.testing.contract', 'rockbench.testing.agree', 'rockbench.compare', "
+            "'rockbench.testing.contract', 'rockbench.testing.agree', 'rockbench.comparison', "
             "'rockbench.engines.pymunk') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()

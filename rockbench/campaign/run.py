@@ -8,7 +8,7 @@ table):
 
 1. **Pulse cases** - the paper's symmetric and asymmetric frames, free-standing and hybrid
    (scenes :data:`SCENES`), under symmetric and antisymmetric Ricker pulses of both signs at the
-   (A, W) points :data:`PULSE_POINTS`: one :func:`rockbench.compare.compare` per case (rotation
+   (A, W) points :data:`PULSE_POINTS`: one :func:`rockbench.comparison.compare` per case (rotation
    histories, nrmse, peak error, eta, verdicts, cost).
 2. **Free rocking** - every scene released from phi0 = :data:`FREE_PHI0_OVER_ALPHA` alpha: the
    effective eta of each engine per rocking direction against the analytic eta.
@@ -90,7 +90,7 @@ def _job_label(job: Mapping[str, Any]) -> str:
 
 def _run_job(job: dict[str, Any]) -> dict[str, Any]:
     """One comparison job (in a worker): returns a small, picklable payload."""
-    from ..compare import compare, eta_rows, metrics
+    from ..comparison import compare, eta_rows, metrics
     from ..report.figures import Trace
     from ..runner import run
     from ..scene import load_scene
@@ -453,7 +453,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     if choice.get("stress") is not None:
         files["stress.csv"] = choice["stress"]
         files["stress_breaking_points.csv"] = choice["breaks"]
-    from ..compare import ETA_COLUMNS, METRIC_COLUMNS
+    from ..comparison import ETA_COLUMNS, METRIC_COLUMNS
     for name, df in files.items():
         # an undocumented column with no value (left by rows a reused store kept from older
         # code) is not written: the files do not depend on the store's history

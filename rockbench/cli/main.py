@@ -128,16 +128,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="reports", metavar="DIR", help="output folder (reports)")
     p.add_argument("--records", metavar="DIR", help="records folder (default: bundled ones)")
     add_engine_option(p, "every available one")
-    p.add_argument("--quick", action="store_true", help="a small campaign (minutes)")
+    p.add_argument("--quick", action="store_true",
+                   help="a small campaign that still decides: the quick evidence, the fast "
+                        "engines' maps only, no stability sweep or fragility")
     p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")
     p.add_argument("--dask", metavar="ADDRESS",
                    help="run the cases on a dask.distributed scheduler at ADDRESS")
     p.add_argument("--store", metavar="PATH",
                    help="result store (Parquet or CSV); finished cases are skipped on a rerun")
     p.add_argument("--full", action="store_true",
-                   help="the long campaign: measure the 12x12x4 engine maps (OUT/engine-maps) "
-                        "that are missing or no longer reproduce, and the full stability sweep "
-                        "(reuses the store)")
+                   help="the long campaign: measure every engine's map at the plan's full grid "
+                        "(the paper's: 100x100x4, adaptively; OUT/engine-maps) where it is "
+                        "missing or no longer reproduces, the next larger evidence and the full "
+                        "stability sweep (reuses the store)")
     add_quiet_option(p)
     from .choosing import add_choosing_commands
 
@@ -330,16 +333,12 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_engines(args: argparse.Namespace) -> int:
-    from ..engines import engine_info
+    from ..engines import engine_info, engine_versions
 
     rows = engine_info()
+    packages = engine_versions()                 # from the package metadata, no import
     for r in rows:
-        from ..engines import get_backend
-        try:
-            dist = getattr(get_backend(r["name"]), "package", r["name"])
-        except RockbenchError:
-            dist = r["name"]
-        r["package"] = _package_version(dist)
+        r["package"] = packages.get(r["name"])
     if args.json:
         print_json(rows)
         return 0
@@ -349,17 +348,8 @@ def cmd_engines(args: argparse.Namespace) -> int:
     return 0
 
 
-def _package_version(dist: str) -> str | None:
-    from importlib import metadata
-
-    try:
-        return f"{dist} {metadata.version(dist)}"
-    except metadata.PackageNotFoundError:
-        return None
-
-
 def cmd_compare(args: argparse.Namespace) -> int:
-    from .. import compare as compare_mod
+    from .. import comparison as compare_mod
     from ..runner import REFERENCE, resolve_engines
 
     scene = load_scene_from(args)

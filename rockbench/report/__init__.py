@@ -1,7 +1,7 @@
 """Reports: figures and the self-contained HTML pages. This layer reads Results and comparison
 tables only: it imports no engine, scene, sweep, runner or campaign module.
 
->>> from rockbench.compare import compare                                  # doctest: +SKIP
+>>> from rockbench.comparison import compare                                  # doctest: +SKIP
 >>> from rockbench.report import write_case_report                        # doctest: +SKIP
 >>> write_case_report(compare(scene, pulse), "reports/my-case")           # doctest: +SKIP
 

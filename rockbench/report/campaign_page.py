@@ -10,7 +10,7 @@ from html import escape
 
 import pandas as pd
 
-from ..compare import DERIVED_COLUMNS, METRIC_COLUMNS
+from ..comparison import DERIVED_COLUMNS, METRIC_COLUMNS
 from . import figures as F
 from . import html as H
 from .tables import CAMPAIGN_COLUMNS

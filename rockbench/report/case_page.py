@@ -1,5 +1,5 @@
 """The report of one comparison: :func:`write_case_report` turns a
-:class:`rockbench.compare.Comparison` into a self-contained ``index.html`` (summary table
+:class:`rockbench.comparison.Comparison` into a self-contained ``index.html`` (summary table
 coloured by agreement, conclusion, rotation histories, eta per impact, settings and versions)
 plus the tables as CSV; :func:`case_conclusion` writes the findings in words from the metrics
 table alone. Built from the blocks of :mod:`rockbench.report.html`; reads the Comparison only
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..compare import DERIVED_COLUMNS, ETA_COLUMNS, METRIC_COLUMNS, with_derived
+from ..comparison import DERIVED_COLUMNS, ETA_COLUMNS, METRIC_COLUMNS, with_derived
 from ..result import motion_label
 from . import figures as F
 from .html import (_dl, conclusion_html, figure_html, fmt, grade_legend, html_table,
@@ -138,8 +138,8 @@ def write_case_report(comparison, out_dir, *, histories: bool = True,
 
     Files: ``index.html`` (self-contained: summary table coloured by agreement, conclusion,
     rotation histories, eta per impact, settings and versions), ``metrics.csv`` (the
-    comparison table, columns :data:`rockbench.compare.METRIC_COLUMNS`), ``eta.csv``
-    (:data:`rockbench.compare.ETA_COLUMNS`), ``history.csv`` when ``histories`` (backend, t [s],
+    comparison table, columns :data:`rockbench.comparison.METRIC_COLUMNS`), ``eta.csv``
+    (:data:`rockbench.comparison.ETA_COLUMNS`), ``history.csv`` when ``histories`` (backend, t [s],
     phi [rad], phidot [rad/s], ground_acc [m/s^2], mode), and the figures as PNG in
     ``out_dir/figures/``.
     """

@@ -5,13 +5,13 @@ window, no global state and no GUI backend is involved; :func:`png_bytes` and :f
 render one to PNG (the HTML pages embed them as ``data:`` URIs, so a page needs no network).
 
 Inputs are plain tables (pandas frames whose columns are those of
-:data:`rockbench.compare.METRIC_COLUMNS` / :data:`~rockbench.compare.ETA_COLUMNS`, or the
+:data:`rockbench.comparison.METRIC_COLUMNS` / :data:`~rockbench.comparison.ETA_COLUMNS`, or the
 campaign's tables documented in ``docs/report.md``) and :class:`rockbench.result.Result` objects
 (or light "traces", see :func:`as_trace`). Units: time in s, rotations as phi / alpha [-] with
 alpha the slenderness of the taller column [rad], eta [-], real-time factor [-] (simulated s per
 wall s), A = a_g / (g tan alpha) [-], W = omega_g / p [-].
 
-Agreement colours (:func:`grade`, from ``rockbench.compare.TOLERANCES["grades"]``) are shared
+Agreement colours (:func:`grade`, from ``rockbench.comparison.TOLERANCES["grades"]``) are shared
 with the HTML tables; the thresholds are stated in ``docs/report.md``.
 """
 
@@ -31,7 +31,7 @@ from matplotlib.figure import Figure
 from .legibility import wrap_at
 from matplotlib.lines import Line2D
 
-from ..compare import TOLERANCES
+from ..comparison import TOLERANCES
 
 __all__ = [
     "GRADE_COLORS",
@@ -290,7 +290,7 @@ def plot_eta(eta: pd.DataFrame, *, title: str | None = None) -> Figure:
     eta of the impact's direction (dashed), for each rocking direction; right panels: mean and
     standard deviation per backend.
 
-    ``eta`` has the columns of :data:`rockbench.compare.ETA_COLUMNS` (backend, impact, t,
+    ``eta`` has the columns of :data:`rockbench.comparison.ETA_COLUMNS` (backend, impact, t,
     direction, eta, eta_ref, rel_error).
     """
     fig = Figure(figsize=(9.5, 6.0), layout="constrained")

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..compare import DERIVED_COLUMNS, TOLERANCES, with_derived  # noqa: F401 (re-exported)
+from ..comparison import DERIVED_COLUMNS, TOLERANCES, with_derived  # noqa: F401 (re-exported)
 from . import figures as F
 
 __all__ = [

@@ -1,5 +1,5 @@
 """The campaign's tables, built from what the campaign hands over: comparison payloads (the
-tables of :func:`rockbench.compare.compare`), time-step rows and sweep frames
+tables of :func:`rockbench.comparison.compare`), time-step rows and sweep frames
 (:func:`rockbench.sweep.run_cases`). Columns and units: :data:`CAMPAIGN_COLUMNS` and
 ``docs/report.md``. Pure functions of data frames: nothing here runs anything."""
 
@@ -34,10 +34,10 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
                        "some analytic run of the band overturns too)",
         "band_distance": "-, signed distance of the backend's peak to the band, in alpha (0 "
                          "inside)",
-        "(then)": "every column of rockbench.compare.METRIC_COLUMNS",
+        "(then)": "every column of rockbench.comparison.METRIC_COLUMNS",
     },
     "eta.csv": {"scene": "-, scene (free rocking)", "phi0": "rad, initial rotation",
-                "(then)": "every column of rockbench.compare.ETA_COLUMNS"},
+                "(then)": "every column of rockbench.comparison.ETA_COLUMNS"},
     "eta_summary.csv": {
         "scene": "-", "backend": "-", "direction": "-, +1 counterclockwise, -1 clockwise",
         "eta_ref": "-, analytic eta", "eta_mean": "-, mean effective eta",

@@ -304,7 +304,7 @@ def run_point(item: tuple[str, StressPoint]) -> dict[str, Any]:
     """Run one engine on one point against the analytic reference; never raises."""
     import time
 
-    from ..compare import TOLERANCES, metrics
+    from ..comparison import TOLERANCES, metrics
     from ..runner import run
 
     engine, pt = item

@@ -6,7 +6,7 @@ every setting (by default the one ladder of time steps,
 :data:`rockbench.studies.tradeoff_tables.DT_LADDER`), with
 repeats, and measures
 
-* **accuracy against the analytic reference** (:func:`rockbench.compare.metrics` on every run):
+* **accuracy against the analytic reference** (:func:`rockbench.comparison.metrics` on every run):
   worst and median |peak error| over the surviving pulses, worst and median nrmse, worst and
   median eta error over the free-rocking runs, overturning-verdict agreement;
 * **self-consistency** (Erez, Tassa & Todorov 2015, "Simulation tools for model-based robotics"):
@@ -28,7 +28,7 @@ diagram.
 
 The **worst validation error** (``worst_error``, what ``rockbench advise`` compares with a
 tolerance) of a setting is the largest of: |peak error| of every surviving pulse, the eta error
-of every free-rocking impact (:func:`rockbench.compare.metrics`' ``eta_max_rel_error``); it is
+of every free-rocking impact (:func:`rockbench.comparison.metrics`' ``eta_max_rel_error``); it is
 infinite when a run is not ``ok`` or gets the overturning verdict wrong. Errors are relative
 (0.02 = 2 %).
 
@@ -254,7 +254,7 @@ def _run_item(item: dict[str, Any]) -> dict[str, Any]:
     the steady-state part of every repeat, the model build and the process's one-off warm-up
     apart) and the thinned history (t, phi) for self-consistency.
     Never raises for a failure of the run: it becomes status "error"."""
-    from ..compare import metrics
+    from ..comparison import metrics
     from ..runner import run
 
     case: ValidationCase = item["case"]

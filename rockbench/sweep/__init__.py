@@ -9,7 +9,7 @@
 * :mod:`.adaptive` - adaptive maps (simulate where the verdict can change, infer the rest);
 * :mod:`.runs` - :func:`run_case` and :func:`run_cases`.
 
-:func:`overturn_map` (defined in :mod:`rockbench.compare`) pivots a sweep frame into an A x W
+:func:`overturn_map` (defined in :mod:`rockbench.comparison`) pivots a sweep frame into an A x W
 table (paper Figs. 4-8).
 """
 
@@ -19,7 +19,7 @@ from .cases import CASE_KEYS, case_id, normalize_case, pulse_grid
 from .executors import EXECUTORS
 from .runs import TIMING_COLUMNS, run_case, run_cases
 from .store import load_store
-from ..compare import overturn_map
+from ..comparison import overturn_map
 
 __all__ = ["run_cases", "run_case", "normalize_case", "case_id", "load_store", "pulse_grid",
            "overturn_map", "CASE_KEYS", "TIMING_COLUMNS", "EXECUTORS"]

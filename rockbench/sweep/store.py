@@ -71,7 +71,7 @@ def key(item: Any) -> str:
 #: lists, which are inputs that the stores key on) enters the fingerprint, so editing a help
 #: text or a figure keeps every stored result.
 PHYSICS_CODE = ("analytic", "engines", "scene", "scenarios", "measure.py", "constants.py",
-                "result.py", "compare.py", "runner.py", "studies/sensitivity.py")
+                "result.py", "comparison.py", "runner.py", "studies/sensitivity.py")
 
 
 def fingerprint_files() -> list[str]:

@@ -1,8 +1,8 @@
 """Does a run agree with the analytic reference? :func:`assert_agree`, in the spirit of
 Gymnasium's ``env_match``: one function that checks two runs of the same case produce matching
 results, and raises ``AssertionError`` saying what failed, by how much and where in time, so
-that it reads well in a pytest report. The metrics are those of :mod:`rockbench.compare`; the
-tolerances are entries of its one table, :data:`rockbench.compare.TOLERANCES`.
+that it reads well in a pytest report. The metrics are those of :mod:`rockbench.comparison`; the
+tolerances are entries of its one table, :data:`rockbench.comparison.TOLERANCES`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..compare import TOLERANCES
+from ..comparison import TOLERANCES
 from ..errors import ParameterError
 
 __all__ = ["assert_agree"]
@@ -114,7 +114,7 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
         model's own unpredictability.
 
     A tolerance of None skips that check. The defaults are
-    ``rockbench.compare.TOLERANCES["assert_agree"]``; the cross-engine bars are other entries of
+    ``rockbench.comparison.TOLERANCES["assert_agree"]``; the cross-engine bars are other entries of
     that table: ``assert_agree(result, reference, **TOLERANCES["free_rocking"])``. The message
     names each failed metric, by how much it missed, and where in time (time of the peaks, of
     the largest history error, impact index and time, time of overturning). A run that is not
@@ -125,7 +125,7 @@ def assert_agree(result, reference, *, peak_rtol: float | None = _DEFAULTS["peak
     (first sample of phi); otherwise ``ParameterError`` says what differs.
     """
     __tracebackhide__ = True  # a failure points at the caller's line, not at this function
-    from ..compare import eta_rows, history_error, metrics, peak_of
+    from ..comparison import eta_rows, history_error, metrics, peak_of
     from ..result import Result, motion_label
 
     for nm, r in (("result", result), ("reference", reference)):

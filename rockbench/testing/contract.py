@@ -4,7 +4,7 @@
 item, each returning a one-line detail or raising ``AssertionError`` saying what failed.
 
 The checks run on :data:`CHECK_SCENE` (Housner's block); the free-rocking bars are
-``rockbench.compare.TOLERANCES["check_backend"]``.
+``rockbench.comparison.TOLERANCES["check_backend"]``.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from ..compare import TOLERANCES
+from ..comparison import TOLERANCES
 from ..errors import ParameterError
 from .agree import _ensure, _pct
 
@@ -247,7 +247,7 @@ def check_units(c: _Context) -> str:
 def check_phi_definition(c: _Context) -> str:
     """Free rocking from phi0 = +-alpha/2 starts at phi0, rocks back towards 0 and follows the
     analytic history (RMS error / alpha <= :data:`FREE_ROCKING_NRMSE`)."""
-    from ..compare import history_error
+    from ..comparison import history_error
     from ..engines import get_backend
 
     alpha, out = c.scene.alpha, []

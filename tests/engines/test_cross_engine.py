@@ -2,7 +2,7 @@
 against the analytic backend on the cases of ``tests/engines/cases.py``.
 
 Bars (the same for every engine; the values are entries of the one tolerance table,
-``rockbench.compare.TOLERANCES``, checked with the product we ship, ``assert_agree``):
+``rockbench.comparison.TOLERANCES``, checked with the product we ship, ``assert_agree``):
 
 * free rocking from 0.5 alpha (housner-block, paper-symmetric, paper-asymmetric): every impact's
   effective eta within 0.5 % of the analytic eta of its direction, both directions present;
@@ -28,7 +28,7 @@ import pytest
 
 import cases
 import rockbench as rb
-from rockbench.compare import TOLERANCES
+from rockbench.comparison import TOLERANCES
 from rockbench.engines import get_backend
 from rockbench.errors import ParameterError
 from rockbench.scene.mechanism import mechanism

@@ -393,7 +393,7 @@ def _eta_table(rows: list[dict[str, Any]]) -> pd.DataFrame:
 # =========================================================================================
 # One case across backends
 # =========================================================================================
-@dataclass
+@dataclass(repr=False)
 class Comparison:
     """Every selected backend on one scene and one ground motion, against the reference.
 
@@ -429,6 +429,52 @@ class Comparison:
     duration: float | None = None
     settings: dict[str, Any] = field(default_factory=dict)
     constants: dict[str, Any] = field(default_factory=dict)
+
+    def label(self) -> str:
+        """``'scene' (motion)``: what was compared."""
+        from .result import motion_label
+
+        m = self.motion if self.motion.get("kind") != "none" else None
+        what = motion_label(m) if m else f"free rocking from phi0 = {self.phi0:.4g} rad"
+        return f"{getattr(self.scene, 'name', None) or 'scene'!r} ({what})"
+
+    def _lines(self) -> list[str]:
+        """One short line per backend: status, peak error, eta error, verdict, cost."""
+        def pct(x: Any) -> str:
+            v = as_float(x)
+            return f"{100 * v:.2f} %" if math.isfinite(v) else "n/a"
+
+        out = []
+        for _, r in self.table.iterrows():
+            bits = [str(r["status"])]
+            if r["backend"] != "analytic":
+                bits.append(f"peak {pct(r.get('peak_rel_error'))}")
+                bits.append(f"eta {pct(r.get('eta_max_rel_error'))}")
+                va = r.get("verdict_agrees")
+                if va is not None and va == va:
+                    bits.append("same verdict" if bool(va) else "OTHER VERDICT")
+            res = self.results.get(r["backend"])
+            if res is not None and res.cost.cpu_s == res.cost.cpu_s:
+                bits.append(f"{res.cost.cpu_s:.3g} CPU s")
+            out.append(f"{r['backend']}: " + ", ".join(bits))
+        return out
+
+    def __repr__(self) -> str:
+        return (f"<Comparison of {len(self.results)} backends on {self.label()}: "
+                + "; ".join(self._lines()) + ">")
+
+    def _repr_html_(self) -> str:
+        """The notebook view: what was compared, one line per backend, the metrics table."""
+        import html as _html
+
+        cols = [c for c in ("backend", "status", "max_abs_phi_over_alpha", "peak_rel_error",
+                            "nrmse", "eta_max_rel_error", "overturned", "verdict_agrees",
+                            "max_penetration", "max_sliding") if c in self.table]
+        return (f"<div><p><b>{_html.escape(self.label())}</b></p><ul>"
+                + "".join(f"<li>{_html.escape(x)}</li>" for x in self._lines()) + "</ul>"
+                + self.table[cols].to_html(index=False, float_format=lambda v: f"{v:.4g}")
+                + "<p>units: docs/metrics.md; <code>comparison.table</code>, "
+                  "<code>.eta</code>, <code>.histories()</code></p></div>")
 
     def histories(self) -> pd.DataFrame:
         """Tidy rotation histories: backend, t [s], phi [rad], phidot [rad/s], ground_acc
