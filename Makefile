@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: report test install clean bench
+.PHONY: report test install clean bench docs
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,9 @@ report: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2
+
+docs: $(STAMP)
+	$(PY) tools/render_docs.py
 
 bench: $(STAMP)
 	$(PY) benchmarks/run.py

@@ -91,12 +91,12 @@ def test_interrupted_map_resumes_to_the_uninterrupted_one(analytic_map, tmp_path
     assert 0 < kept < 100
     again = run_map("paper-asymmetric", store=copy, progress=False, **GRID)
     assert again.attrs["reused"] == kept and again.attrs["cells_run"] == 100 - kept
-    pd.testing.assert_frame_equal(again.drop(columns="wall_s"), full.drop(columns="wall_s"))
+    pd.testing.assert_frame_equal(again.drop(columns="cpu_s"), full.drop(columns="cpu_s"))
     assert len(list(copy.glob("part-*.parquet"))) == 1
     pd.testing.assert_frame_equal(
         pd.read_parquet(copy).sort_values(list(full.columns[:4])).reset_index(drop=True)
-        .drop(columns="wall_s"),
-        full.sort_values(list(full.columns[:4])).reset_index(drop=True).drop(columns="wall_s"),
+        .drop(columns="cpu_s"),
+        full.sort_values(list(full.columns[:4])).reset_index(drop=True).drop(columns="cpu_s"),
         check_dtype=False)
 
 
@@ -130,7 +130,7 @@ def test_map_on_a_real_dask_cluster(analytic_map):
                                   dashboard_address=None) as cluster:
         df = run_map("paper-asymmetric", scheduler=cluster.scheduler_address, progress=False,
                      **GRID)
-    pd.testing.assert_frame_equal(df.drop(columns="wall_s"), full.drop(columns="wall_s"))
+    pd.testing.assert_frame_equal(df.drop(columns="cpu_s"), full.drop(columns="cpu_s"))
 
 
 def test_map_command_line(tmp_path, capsys):
@@ -165,7 +165,7 @@ def test_a_measured_map_is_reused_only_when_it_reproduces(tmp_path):
     got, why = reuse_map(store, "paper-asymmetric", "pymunk", **cells)
     assert got is not None, why
     assert "reproduced now at 4 re-run cells" in why
-    pd.testing.assert_frame_equal(got.drop(columns="wall_s"), df.drop(columns="wall_s"))
+    pd.testing.assert_frame_equal(got.drop(columns="cpu_s"), df.drop(columns="cpu_s"))
     # another engine, another grid, other inputs
     assert reuse_map(store, "paper-asymmetric", "mujoco", **cells)[0] is None
     none, why = reuse_map(store, "paper-asymmetric", "pymunk", **dict(cells, grid=(4, 2)))
@@ -235,8 +235,8 @@ def test_run_map_takes_a_scene_object(tmp_path):
     by_name = run_map("paper-asymmetric", overrides={"span": 9.0}, **small)
     scene = rb.load_scene("paper-asymmetric", {"span": 9.0})
     by_object = run_map(scene, store=tmp_path / "s.parquet", **small)
-    pd.testing.assert_frame_equal(by_object.drop(columns="wall_s"),
-                                  by_name.drop(columns="wall_s"))
+    pd.testing.assert_frame_equal(by_object.drop(columns="cpu_s"),
+                                  by_name.drop(columns="cpu_s"))
     later = run_map(rb.load_scene("paper-asymmetric"), overrides={"span": 9.0},
                     store=tmp_path / "s.parquet", **small)
     assert later.attrs["reused"] == 6                  # the same scene, the same store
@@ -303,7 +303,7 @@ def test_adaptive_map_reproduces_the_full_grid_simulating_a_third(tmp_path, caps
     assert out["reused"] == 2304 - ad.attrs["inferred"]
     again = run_map("paper-asymmetric", store=store, **kw)
     assert again.attrs["cells_run"] == ad.attrs["inferred"] and "inferred" not in again
-    pd.testing.assert_frame_equal(again.drop(columns="wall_s"), full.drop(columns="wall_s"))
+    pd.testing.assert_frame_equal(again.drop(columns="cpu_s"), full.drop(columns="cpu_s"))
 
 
 def test_adaptive_map_at_the_papers_resolution_simulates_far_fewer():

@@ -4,7 +4,7 @@ extrapolate_to_closure`) compiled with numba, for many samples in one call.
 :func:`rockbench.measure.measure_impacts` integrates the mechanism's Eq. 17 from a few sampled
 states on either side of every impact to phi = 0 (classical Runge-Kutta, steps of
 :data:`rockbench.measure.EOM_STEP`, Newton on the last sub-step). In Python that costs about
-as much as stepping pymunk through the whole run (issue 12); this kernel does the same
+as much as stepping pymunk through the whole run; this kernel does the same
 arithmetic on the compiled path's mechanism (:func:`rockbench.analytic.kernels._phidd`) and
 ground motions (:func:`~rockbench.analytic.kernels._acc`). It agrees with the Python function
 to rounding (``tests/engines/test_fast_paths.py``).

@@ -1,4 +1,4 @@
-"""The default campaign's fragility section (issue 26, ``docs/fragility.md``): the runs and
+"""The default campaign's fragility section (``docs/fragility.md``): the runs and
 analyses of :mod:`rockbench.studies.fragility` on the paper's Fig. 9 frames, at a size that keeps
 ``make report`` within its budget (:data:`REPORT_SIZES`; the whole ladder for every engine with
 ``rockbench report --full``). The page block is

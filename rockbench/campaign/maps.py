@@ -1,4 +1,4 @@
-"""The overturning-map part of the default campaign (paper Figs. 4-7, issue 11).
+"""The overturning-map part of the default campaign (paper Figs. 4-7; ``docs/maps.md``).
 
 * Analytic maps at the paper's resolution (the plan's ``analytic_grid``) for the paper's
   frames, through the compiled analytic path;

@@ -307,7 +307,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                            if r["state"] == "ran" and r["name"] != REFERENCE]
     absent = [r for r in states if r["state"] != "ran" and r["name"] != REFERENCE]
     missing = [r["name"] for r in absent if r["state"] == "not installed"]
-    fragility_records = records_dir      # None: the fragility section's own ensemble (issue 26)
+    fragility_records = records_dir      # None: the fragility section's own ensemble
     if records_dir is None and not quick:
         records_dir = bundled_dir()       # the public-domain records shipped in the package
     if records_dir is not None:
@@ -419,7 +419,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         records = _records(records_dir, plan, names, notes, store=sweep_store, **run)
     timings["records"] = time.perf_counter() - t
 
-    # 6: fragility over an ensemble of records (issue 26; rockbench/campaign/fragility.py) ----
+    # 6: fragility over an ensemble of records (rockbench/campaign/fragility.py) ---------------
     t = time.perf_counter()
     frag: dict[str, Any] = {}
     if not quick:
@@ -497,7 +497,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                           f"W in {mp['analytic_frequency']}, pulse window + 10 s",
             axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
                  f"+ {mp['engine_tail']:g} s", paper=paper))
-    if frag:                                   # issue 26: report/fragility_figures.py
+    if frag:                                   # report/fragility_figures.py
         from ..report.fragility_figures import fragility_html
         sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)" if paper
                                                                      else ""),

@@ -1,4 +1,4 @@
-"""The command-line commands of issue 13 (``docs/choosing.md``): ``rockbench tradeoff``,
+"""The commands for choosing a modelling approach (``docs/choosing.md``): ``rockbench tradeoff``,
 ``rockbench advise`` and ``rockbench stress`` - their arguments (:func:`add_choosing_commands`,
 called by :func:`rockbench.cli.main.build_parser`) and their commands (``cmd_*``, dispatched by
 :data:`rockbench.cli.main.COMMANDS`). Errors follow :mod:`rockbench.cli.main`: one line, exit code 2.
@@ -30,7 +30,7 @@ def _dts(text: str) -> list[float]:
 
 
 def add_choosing_commands(sub) -> None:
-    """tradeoff, advise and stress (issue 13; docs/choosing.md)."""
+    """tradeoff, advise and stress (docs/choosing.md)."""
     from .common import (add_scene_options, arg_count, arg_names, arg_positive, add_engine_option,
                       add_quiet_option)
 

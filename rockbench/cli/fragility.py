@@ -1,4 +1,4 @@
-"""The ``rockbench fragility`` command (issue 26, ``docs/fragility.md``): arguments and output
+"""The ``rockbench fragility`` command (``docs/fragility.md``): arguments and output
 only; the work is :mod:`rockbench.studies.fragility`.
 
     rockbench fragility SCENE --records DIR|FILE|NAME ... [--engine E ...] [--scales LO:HI:N]

@@ -147,7 +147,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_choosing_commands(sub)
     from .maps import add_map_command
     add_map_command(sub)
-    from .fragility import register as add_fragility  # rockbench fragility (issue 26)
+    from .fragility import register as add_fragility  # rockbench fragility
     add_fragility(sub, COMMANDS)
     return parser
 

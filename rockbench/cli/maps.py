@@ -1,4 +1,4 @@
-"""The ``rockbench map`` command (issue 11, ``docs/maps.md``): arguments and output only;
+"""The ``rockbench map`` command (``docs/maps.md``): arguments and output only;
 the work is :mod:`rockbench.studies.maps`."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ __all__ = ["add_map_command", "cmd_map"]
 
 
 def add_map_command(sub) -> None:
-    """map (issue 11; docs/maps.md)."""
+    """map (docs/maps.md)."""
     p = sub.add_parser("map", help="overturning map of a scene over (A, W) under Ricker pulses, "
                        "or --compare two stored maps")
     p.add_argument("scene", metavar="SCENE", nargs="?",

@@ -2,8 +2,8 @@
 whose C step function can be called directly (pymunk's Chipmunk, MuJoCo).
 
 Through Python, one step of a three-body frame costs about 1 microsecond inside Chipmunk and
-several more in the calls around it; a run spent most of its time in rockbench's loop (issue
-12). :func:`run_kernel` is that loop in numba - ground-motion gravity, device forces and the
+several more in the calls around it, so a run spends most of its time in rockbench's loop.
+:func:`run_kernel` is that loop in numba - ground-motion gravity, device forces and the
 fracture check, the overturn check, the engine's step, the state read, the output samples with
 their linear interpolation - calling the engine's exported C functions by address (found with
 ``ctypes`` in the engine's own library) on the world the adapter built. It returns to Python

@@ -574,7 +574,7 @@ def _first_eta_finite(t, phi, phidot, intact, exc: list, measure: dict) -> bool:
 
 def _unmeasured(impacts: list, cfg) -> tuple[str, str | None]:
     """("invalid", why) for a run that finished without an engine failure but whose result
-    cannot be read as rocking (issue 13), else ("ok", None):
+    cannot be read as rocking, else ("ok", None):
 
     * two or more impacts and not one measurable eta (e.g. ``output_dt`` of 10 ms is too coarse
       for the velocity fits around an impact under a ground motion): the run's impacts are

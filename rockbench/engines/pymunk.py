@@ -40,7 +40,7 @@ class PymunkSettings(EngineSettings):
     ``docs/engines/pymunk.md`` (``benchmarks/pymunk_settings.py --sweep``); structures are in
     metres and tonnes, while pymunk's own defaults assume pixels.
 
-    dt : time step [s] (default 1e-3: every bar of issue 3 met with a factor >= 2 to spare;
+    dt : time step [s] (default 1e-3: every cross-engine bar met with a factor >= 2 to spare;
         5e-4 halves the errors at half the speed, 2e-3 fails the eta bar).
     friction : Coulomb coefficient of every contact pair [-] (default 2: the results are
         identical from 0.7 to 10; at 0.5 a hybrid frame slides by 4 cm).

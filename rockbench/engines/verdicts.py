@@ -3,7 +3,7 @@
 collapse rule (the verdict rule of every backend), energy growth between peaks, what a run that
 stopped early still says (a fall finished by the analytic model from its last state, a peak
 and verdict that are final, or an unknown verdict), and whether a run that finished moved when
-it had to (issue 22; ``docs/errors.md``).
+it had to (``docs/errors.md``).
 
 Units: SI and radians.
 """

@@ -1,4 +1,4 @@
-"""Figures and the page block of the fragility section (issue 26, ``docs/fragility.md``).
+"""Figures and the page block of the fragility section (``docs/fragility.md``).
 
 Inputs are plain data: the runs frame and the analysis dict of :mod:`rockbench.studies.fragility`
 (``runs``: backend, record, polarity, scale, im, peak = max |phi| / alpha [-], overturned,

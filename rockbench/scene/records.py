@@ -603,7 +603,7 @@ def _check_enough(path: Path, values: np.ndarray) -> None:
 
 
 # ------------------------------------------------------------------------------------------------
-# Records shipped inside the package (issue 14): rockbench/records/, provenance in its PROVENANCE.md
+# Records shipped inside the package: rockbench/records/, provenance in its PROVENANCE.md
 def bundled_dir() -> Path:
     """The package-data folder of the bundled records (``rockbench/records``)."""
     from importlib.resources import files

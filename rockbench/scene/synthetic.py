@@ -1,6 +1,6 @@
 """Synthetic ground motions: the site-based stochastic model of Rezaeian & Der Kiureghian.
 
-A record set the package may ship and regenerate bit for bit from a seed (issue 39 §1), for
+A record set the package may ship and regenerate bit for bit from a seed, for
 studies (fragility, the report's Fig. 9 section) that need >= 20 records without external files.
 ``docs/synthetic.md`` is the user's page: the model, its sources, the default scenario, and what
 the motions are not (no near-fault velocity pulses).

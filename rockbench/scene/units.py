@@ -1,6 +1,6 @@
 """Acceleration units of ground-motion records: every spelling record headers and agencies use
 (``g``, ``gal``, ``cm/s^2``, ``CM/S/S``, ``cm/sec2``, ``m/s^2``, ``mm/s^2``, ``in/s^2``, ...) to one
-canonical name and its factor to m/s^2 (issue 22: ``UNITS: CM/S^2`` was read as g)."""
+canonical name and its factor to m/s^2; an unknown spelling is refused, never read as g."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Fragility: records judged as earthquake engineers judge them (issue 26, ``docs/fragility.md``).
+"""Fragility: records judged as earthquake engineers judge them (``docs/fragility.md``).
 
 Every record of an ensemble, as recorded and reversed (both polarities), at a ladder of scale
 factors (incremental dynamic analysis), through the analytic model and each engine; then, per

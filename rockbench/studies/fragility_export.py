@@ -1,4 +1,4 @@
-"""Fitted fragility curves in two risk tools' formats (issue 39 §4, ``docs/fragility-export.md``).
+"""Fitted fragility curves in two risk tools' formats (``docs/fragility-export.md``).
 
 The curves are rockbench's lognormal fits (:func:`rockbench.studies.fragility.fit_lognormal`):
 per backend, P(overturning | IM = x) = Phi(ln(x / median) / beta), the median in the intensity

@@ -36,8 +36,8 @@ def boundary(df: pd.DataFrame) -> pd.DataFrame:
 
 
 #: Relative margin in A within which a cell is "near the boundary": the engines' own
-#: boundary is blurred and not monotone within about 2 % of the reference's (measured in
-#: issue 24: MuJoCo overturns at A = 14.90 and survives at A = 15.00, W = 6), so a verdict
+#: boundary is blurred and not monotone within about 2 % of the reference's (measured:
+#: MuJoCo overturns at A = 14.90 and survives at A = 15.00, W = 6), so a verdict
 #: there says little about an engine.
 NEAR_BOUNDARY_MARGIN = 0.02
 

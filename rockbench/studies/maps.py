@@ -28,7 +28,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from ..constants import FALL_EXTENSION
+from ..constants import FALL_EXTENSION, FREE_TAIL
 from ..errors import ParameterError, RockbenchError
 from ..sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
                               error_rows, load_map, map_rows, open_map_store, part_files,
@@ -143,24 +143,24 @@ def _load_scene_ref(ref: Any, overrides: dict | None = None):
 
 
 def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
-                   extra: float = 0.0) -> pd.DataFrame:
+                   extra: float = 0.0, parallel: bool = False) -> pd.DataFrame:
     """Map rows of analytic ``cells`` in their order, each run for its map length plus
-    ``extra`` seconds."""
+    ``extra`` seconds (``parallel``: the compiled kernel's cells on numba's threads)."""
     if method == "compiled":
         from ..analytic.compiled import run_pulse_grid
         if tail is None and not extra:
-            df = run_pulse_grid(scene, cells)
+            df = run_pulse_grid(scene, cells, parallel=parallel)
         else:
-            t = 10.0 if tail is None else tail
+            t = FREE_TAIL if tail is None else tail
             byw: dict[float, list] = {}
             for i, c in enumerate(cells):
                 byw.setdefault(c[3], []).append(i)
             df = pd.concat([run_pulse_grid(scene, [cells[i] for i in ix],
-                                           duration=cell_duration(scene, w, t + extra))
+                                           duration=cell_duration(scene, w, t + extra),
+                                           parallel=parallel)
                             for w, ix in byw.items()], ignore_index=True)
             order = np.concatenate([np.asarray(ix) for ix in byw.values()])
             df = df.iloc[np.argsort(order, kind="stable")].reset_index(drop=True)  # cells' order
-        df["wall_s"] = df["cpu_s"]
         return df[list(MAP_COLUMNS)]
     from ..runner import run
     from ..scene.motion import RickerPulse
@@ -168,14 +168,14 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
     for shape, sign, A, W in cells:
         pulse = RickerPulse.dimensionless(A, W, scene.structure, shape, sign)
         dur = None if tail is None and not extra else cell_duration(
-            scene, W, (10.0 if tail is None else tail) + extra)
+            scene, W, (FREE_TAIL if tail is None else tail) + extra)
         r = run(scene, pulse, history="minimal", duration=dur)
         s = r.summary
         rows.append({"amplitude": A, "frequency": W, "pulse": shape, "sign": sign,
                      "overturned": s.overturned, "exceeded_critical": s.exceeded_critical,
                      "max_abs_phi_over_alpha": s.max_abs_phi_over_alpha,
                      "n_impacts": s.n_impacts, "fractured": s.fractured, "status": s.status,
-                     "wall_s": r.cost.wall_s})
+                     "cpu_s": r.cost.cpu_s})
     return pd.DataFrame(rows, columns=list(MAP_COLUMNS))
 
 
@@ -189,22 +189,32 @@ def _analytic_chunk(args: tuple) -> pd.DataFrame:
     under way is finished (its row is the longer run's); a frame that came back keeps its
     verdict."""
     scene_ref, overrides, cells, method, tail = args
-    scene = _load_scene_ref(scene_ref, overrides)
-    df = _analytic_rows(scene, cells, method, tail)
+    return _analytic_cells(_load_scene_ref(scene_ref, overrides), cells, method, tail)
+
+
+def _analytic_cells(scene, cells: Sequence, method: str, tail: float | None,
+                    parallel: bool = False) -> pd.DataFrame:
+    """The rows of analytic ``cells``, a fall under way finished (:func:`_analytic_chunk`)."""
+    df = _analytic_rows(scene, cells, method, tail, parallel=parallel)
     pending = ((df["status"] == "ok") & df["exceeded_critical"].astype(bool)
                & ~df["overturned"].astype(bool)).to_numpy()
     if pending.any():
         again = [c for c, p in zip(cells, pending) if p]
-        longer = _analytic_rows(scene, again, method, tail, extra=FALL_EXTENSION)
+        longer = _analytic_rows(scene, again, method, tail, extra=FALL_EXTENSION,
+                                parallel=parallel)
         df = df.copy()
         idx = np.flatnonzero(pending)
         for col in MAP_COLUMNS:
-            if col != "wall_s":
+            if col != "cpu_s":
                 df[col] = df[col].astype(object)
                 df.loc[idx, col] = longer[col].to_numpy(dtype=object)
-        df.loc[idx, "wall_s"] = (df.loc[idx, "wall_s"].to_numpy(float)
-                                 + longer["wall_s"].to_numpy(float))
+        df.loc[idx, "cpu_s"] = (df.loc[idx, "cpu_s"].to_numpy(float)
+                                + longer["cpu_s"].to_numpy(float))
     return df
+#: Cells per part of an analytic map run in this process (its progress and store grain).
+LOCAL_CHUNK = 2000
+
+
 def _check_backend(engine: str) -> None:
     """BackendUnavailable (one line: which backend, why) before any cell runs."""
     from ..engines import get_backend
@@ -349,7 +359,24 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
 
     if path is not None and written[0] > 1:
         compact_map_store(path)                    # duplicates a killed compaction may have left
-    if engine == "analytic":
+    if engine == "analytic" and method == "compiled" and executor != "dask" and todo:
+        # the compiled kernel in this process, its cells on numba's threads (one per core):
+        # no worker process to start, import and feed, parts of many cells
+        from ..progress import bar as progress_bar
+
+        scene = _load_scene_ref(scene_ref, overrides)
+        threads = (local_workers(workers) if executor == "process" else 1)
+        size = chunk or max(LOCAL_CHUNK, math.ceil(len(todo) / 20))
+        bar = progress_bar(len(todo), f"map {sc.name} analytic ({reused} reused)", "cell",
+                           show=progress)
+        try:
+            for i in range(0, len(todo), size):
+                part = todo[i:i + size]
+                on_result("", _analytic_cells(scene, part, method, tail, parallel=threads > 1))
+                bar.update(len(part))
+        finally:
+            bar.close()
+    elif engine == "analytic":
         n_workers = (local_workers(workers) if executor == "process"
                      else workers or cpu_count())
         size = chunk or (max(1, min(200, math.ceil(len(todo) / (4 * n_workers)))))

@@ -1,5 +1,5 @@
 """The analytic model's own sensitivity: a predictability band for one case, and an engine judged
-against it (issue 14; Bachmann et al. 2018, "Is rocking motion predictable?").
+against it (Bachmann et al. 2018, "Is rocking motion predictable?").
 
 For one scene and ground motion, :func:`band` runs the analytic model unperturbed and under
 small perturbations that no one can claim to know better than (:data:`PERTURBATIONS`):

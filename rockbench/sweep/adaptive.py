@@ -1,4 +1,4 @@
-"""Adaptive overturning maps (issue 27, ``docs/maps.md``): simulate where the verdict can
+"""Adaptive overturning maps (``docs/maps.md``): simulate where the verdict can
 change, infer the rest. Used by :func:`rockbench.studies.maps.run_map` (``adaptive=True``)."""
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ NEAR_CRITICAL = 0.7
 def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
                  pulses: list[tuple[str, int]],
                  stored: tuple[Path, pd.DataFrame] | None) -> pd.DataFrame:
-    """An adaptive map (issue 27): simulate the corners of the coarse blocks (every
+    """An adaptive map: simulate the corners of the coarse blocks (every
     :func:`coarse_stride`-th A and W, and the last), then, level by level, halve every block
     whose corners do not all give one verdict with status ok, where a surviving corner
     rocked beyond :data:`NEAR_CRITICAL` of the critical angle, or (on a grid of at least
@@ -155,7 +155,7 @@ def adaptive_map(sc, compute, axes: tuple[np.ndarray, np.ndarray],
     guessed = [{"amplitude": float(As[a]), "frequency": float(Ws[w]), "pulse": p, "sign": s,
                 "overturned": v, "exceeded_critical": True if v else None,
                 "max_abs_phi_over_alpha": math.nan, "n_impacts": None, "fractured": None,
-                "status": "ok", "wall_s": 0.0, "inferred": True}
+                "status": "ok", "cpu_s": 0.0, "inferred": True}
                for (p, s, a, w), v in verdict.items() if (p, s, a, w) not in known]
     out = sim
     if guessed:

@@ -39,23 +39,31 @@ MAP_COLUMNS: dict[str, str] = {
     "n_impacts": "-, impacts of the run",
     "fractured": "-, tendons fractured",
     "status": "-, ok | diverged | invalid | error",
-    "wall_s": "s, wall time of the integration or stepping (batched: the cell's share)",
+    "cpu_s": "s, process CPU time of the cell's run (batched or threaded: its share)",
 }
 
 MAP_KEY: tuple[str, ...] = ("pulse", "sign", "amplitude", "frequency")
 
 
 def tidy_map(df: pd.DataFrame) -> pd.DataFrame:
+    """``df`` with the map's columns and dtypes (nullable where a cell may lack a value). A
+    store written before maps kept CPU time has a ``wall_s`` column instead: its cells' cost is
+    not known (NaN), never a wall time read as CPU time."""
     df = df.copy()
-    for c in ("amplitude", "frequency", "max_abs_phi_over_alpha", "wall_s"):
-        df[c] = df[c].astype("float64")
+    if "cpu_s" not in df.columns:
+        df["cpu_s"] = math.nan
+    for c in ("amplitude", "frequency", "max_abs_phi_over_alpha", "cpu_s"):
+        df[c] = pd.to_numeric(df[c], errors="coerce").astype("float64")
     df["sign"] = df["sign"].astype("int64")
-    df["n_impacts"] = pd.array([None if pd.isna(v) else int(v) for v in df["n_impacts"]],
-                               dtype="Int64")
+    df["n_impacts"] = pd.to_numeric(df["n_impacts"], errors="coerce").astype("Int64")
     for c in ("overturned", "exceeded_critical", "fractured"):
-        df[c] = pd.array([None if v is None or v is pd.NA or (isinstance(v, float)
-                                                              and math.isnan(v)) else bool(v)
-                          for v in df[c]], dtype="boolean")
+        col = df[c]
+        if col.dtype == bool or str(col.dtype) == "boolean":
+            df[c] = col.astype("boolean")
+        else:
+            df[c] = pd.array([None if v is None or v is pd.NA or (isinstance(v, float)
+                                                                  and math.isnan(v))
+                              else bool(v) for v in col], dtype="boolean")
     df["pulse"] = df["pulse"].astype(str)
     df["status"] = df["status"].astype(str)
     if "inferred" in df.columns:            # an adaptive map's cells that were not simulated
@@ -89,7 +97,7 @@ def map_rows(rows: Sequence[dict]) -> pd.DataFrame:
         "exceeded_critical": r.get("exceeded_critical"),
         "max_abs_phi_over_alpha": r.get("max_abs_phi_over_alpha", math.nan),
         "n_impacts": r.get("n_impacts"), "fractured": r.get("fractured"),
-        "status": r.get("status", "error"), "wall_s": r.get("wall_s", math.nan)}
+        "status": r.get("status", "error"), "cpu_s": r.get("cpu_s", math.nan)}
         for r in rows], columns=list(MAP_COLUMNS))
 
 
@@ -98,7 +106,7 @@ def error_rows(cells, why: str) -> pd.DataFrame:
     return pd.DataFrame([{"amplitude": A, "frequency": W, "pulse": sh, "sign": sg,
                           "overturned": None, "exceeded_critical": None,
                           "max_abs_phi_over_alpha": math.nan, "n_impacts": None,
-                          "fractured": None, "status": "error", "wall_s": math.nan}
+                          "fractured": None, "status": "error", "cpu_s": math.nan}
                          for sh, sg, A, W in cells], columns=list(MAP_COLUMNS))
 
 
