@@ -156,6 +156,8 @@ METRIC_COLUMNS: dict[str, str] = {
     "wall_s": "s, wall time of the integration or stepping only (model building excluded)",
     "steps": "-, integrator or engine steps",
     "real_time_factor": "-, simulated seconds per wall second",
+    "cpu_s": "s, process CPU time of the whole run (building included, numba compiling apart)",
+    "cpu_per_sim_s": "s/s, cpu_s per simulated second",
 }
 
 #: Columns of :attr:`Comparison.eta`: one row per (backend, impact).
@@ -328,6 +330,9 @@ def metrics(result: Result, reference: Result) -> dict[str, Any]:
     row["wall_s"] = float(result.cost.wall_s)
     row["steps"] = int(result.cost.steps)
     row["real_time_factor"] = float(result.cost.real_time_factor)
+    cpu, sim = float(result.cost.cpu_s), float(result.cost.sim_time)
+    row["cpu_s"] = cpu
+    row["cpu_per_sim_s"] = cpu / sim if sim > 0 and cpu == cpu else math.nan
     if not result.ok:
         return row
     if not reference.ok:

@@ -111,13 +111,13 @@ BAD_PLANS = {
     "sign": ('pulse_shapes = [["symmetric", 2]]', "pulse_shapes", "sign"),
     "nan": ("free_duration = nan", "free_duration", "finite"),
     "negative duration": ("record_duration = -5.0", "record_duration", "(0, 3600]"),
-    "string for a list": ('map_A = "1.5"', "map_A", "a list"),
-    "repeated axis": ("map_W = [3.0, 3.0]", "map_W", "distinct"),
+    "string for a list": ('dt_sweep = "1e-3"', "dt_sweep", "a list"),
+    "repeated step": ("dt_sweep = [1e-3, 1e-3]", "dt_sweep", "distinct"),
     "evidence": ('choice_evidence = "huge"', "choice_evidence", "quick"),
     "dt": ("dt_sweep = [0.5]", "dt_sweep", "time step"),
     "dt_case key": ('dt_case = { scene = "housner-block", shape = "symmetric", sign = 1, '
                     'A = 2.0 }', "dt_case", "missing: W"),
-    "unknown scene": ('map_scene = "nope-scene"', "map_scene", "nope-scene"),
+    "unknown scene": ('choice_scene = "nope-scene"', "choice_scene", "nope-scene"),
     "absurd grid": ("[campaign.maps]\nanalytic_grid = [100000, 100000]", "maps.analytic_grid",
                     "map_cells"),
     "equal axis ends": ('[campaign.maps]\nengine_amplitude = "2:2"', "maps.engine_amplitude",
@@ -190,8 +190,9 @@ def test_compare_of_different_grids_says_what_it_compared(two_maps, capsys):
     rc = main(["map", "--compare", str(two_maps / "a.parquet"), str(two_maps / "b.parquet")])
     out = capsys.readouterr().out
     assert rc == 0
-    assert "compared on the 8 cells both hold (0 only in the first, 6 only in the second)" \
-        in out, out
+    assert "0 of 8 cells differ from the first map" in out, out
+    assert "compared on the cells both maps hold (0 only in the first, 6 only in the second, " \
+        "left out)" in out, out
 
 
 @pytest.mark.parametrize("extra", [["housner-block"], ["--grid", "3x3"], ["--engine", "pymunk"],
@@ -217,10 +218,11 @@ def test_agreement_is_never_rounded_up_to_all():
           "cells_first": 40000, "cells_second": 40000, "common": 40000, "not_ok_first": 0,
           "not_ok_second": 195}
     words = agreement_words(ag)
-    assert words.startswith("13 of 40000 cells differ (99.97 % agree)")
-    assert "195 common cells not ok in the first + second map" in words.replace("0 + ", "")
+    assert words.startswith("13 of 40000 cells differ from the first map (99.97 % agree)")
+    assert "195 runs not ok, left out" in words
     one = dict(ag, differ=1, fraction=1 - 1 / 40000, not_ok_second=0)
-    assert agreement_words(one) == "1 of 40000 cells differ (99.9975 % agree), Cohen's kappa 0.999"
+    assert agreement_words(one) == ("1 of 40000 cells differ from the first map (99.998 % "
+                                    "agree), Cohen's kappa 0.999")
 
 
 # =========================================================================================

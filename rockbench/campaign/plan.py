@@ -14,7 +14,6 @@
     (A_up = min|lambda| / tan alpha) and the smallest analytic overturning threshold of the four
     Ricker pulses at that W (over every scene): each scene rocks and survives;
   - the speed sweep's case on the first scene at A = 0.7 x that threshold, W = 4;
-  - the summary map of the first scene at A = (0.4, 0.7, 0.9, 1.1, 1.5) x its threshold at W = 3;
   - fracture cases: per scene with fracturing devices, the smallest A (A = 1 .. 60 by factors
     of 1.25, antisymmetric + pulse, W = 3) at which the analytic model fractures them;
   - analytic maps of every scene at the paper's resolution, engine maps of the first scene (the
@@ -107,7 +106,7 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
                     folder: str | os.PathLike = ".") -> dict[str, Any]:
     """The campaign plan for ``scenes`` (names, TOML paths or Scenes; the first one is the
     structure the decision is about), derived as the module docstring says. ``quick``: the
-    quick form (one pulse, a 2-point map, two time steps, one record, no fracture cases).
+    quick form (one pulse, two time steps, one record, no fracture cases).
     ``folder``: where Scene objects are saved for the worker processes."""
     from ..scene.scene import load_scene
     from ..studies.validation import uplift_threshold
@@ -143,10 +142,6 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
         "pulse_points": ((r2(rock(a3)), 3.0),) if quick else
         ((r2(rock(a3)), 3.0), (r2(rock(a4)), 4.0)),
         "pulse_shapes": paper["pulse_shapes"] if quick else _SHAPES,
-        "map_scene": first,
-        "map_A": tuple(r2(f * fin(a3_0)) for f in ((0.7, 1.5) if quick
-                                                  else (0.4, 0.7, 0.9, 1.1, 1.5))),
-        "map_W": (3.0,) if quick else (1.5, 2.0, 3.0, 4.0, 6.0),
         "dt_case": {"scene": first, "shape": "symmetric", "sign": 1,
                     "A": r2(0.7 * fin(a4_0)), "W": 4.0},
         "fracture_cases": tuple(frac),
@@ -264,9 +259,8 @@ def _pairs(rows, kinds=(float, float)) -> tuple[tuple, ...]:
 def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     full = {"scenes": tuple(c["scenes"]), "pulse_points": _pairs(c["pulse_points"]),
             "pulse_shapes": _pairs(c["pulse_shapes"], (str, int)),
-            "pulse_tail": float(c["pulse_tail"]), "map_scene": c["map_scene"],
-            "map_A": tuple(map(float, c["map_A"])), "map_W": tuple(map(float, c["map_W"])),
-            "map_duration_tail": None, "dt_sweep": tuple(map(float, c["dt_sweep"])),
+            "pulse_tail": float(c["pulse_tail"]),
+            "dt_sweep": tuple(map(float, c["dt_sweep"])),
             "dt_case": dict(c["dt_case"]), "dt_tail": float(c["pulse_tail"]),
             "free_phi0": float(c["free_phi0"]), "free_duration": float(c["free_duration"]),
             "max_records": None, "record_tail": None,
@@ -274,7 +268,7 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
                                 else None),
             "record_frames": dict(c["record_frames"]),
             "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float)),
-            "choice_scene": str(c.get("choice_scene", c["map_scene"])),
+            "choice_scene": str(c.get("choice_scene", c["scenes"][0])),
             "choice_evidence": str(c.get("choice_evidence", "quick")),
             "stress_scene": c.get("stress_scene"),
             "stress_hybrid_scene": c.get("stress_hybrid_scene"),
@@ -286,9 +280,6 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
                  pulse_shapes=_pairs(q.get("pulse_shapes", full["pulse_shapes"][:1]),
                                      (str, int)),
                  pulse_tail=float(q.get("pulse_tail", 2.0)),
-                 map_A=tuple(map(float, q.get("map_A", full["map_A"][::4]))),
-                 map_W=tuple(map(float, q.get("map_W", full["map_W"][2:3]))),
-                 map_duration_tail=float(q.get("map_duration_tail", 2.0)),
                  dt_sweep=tuple(map(float, q.get("dt_sweep", full["dt_sweep"][1:3]))),
                  dt_case=dict(c["dt_case"]),
                  dt_tail=float(q.get("dt_tail", 2.0)),
@@ -343,15 +334,13 @@ def _paper_plans() -> tuple[dict[str, Any], dict[str, Any]]:
 def campaign_plan(quick: bool = False) -> dict[str, Any]:
     """The paper's plan (a fresh copy; ``scenarios/paper-plan.toml``, read and checked on first
     use): ``scenes``, ``pulse_points`` ((A, W) pairs), ``pulse_shapes`` ((shape, sign) pairs),
-    ``pulse_tail`` [s], ``map_scene``, ``map_A``, ``map_W``, ``map_duration_tail`` [s] (None:
-    pulse + 10 s), ``dt_sweep`` [s], ``dt_case`` (scene, shape, sign, A, W), ``dt_tail`` [s],
+    ``pulse_tail`` [s], ``dt_sweep`` [s], ``dt_case`` (scene, shape, sign, A, W), ``dt_tail`` [s],
     ``free_phi0`` [alpha], ``free_duration`` [s], ``max_records`` (None: all), ``record_tail``
     [s] (None: record + 10 s), ``record_duration`` [s] (cap on a record run's length from its
     start, None: no cap), ``record_frames`` (label -> scene), ``fracture_cases`` ((scene,
     shape, sign, A, W)), the choice and stress scenes and ``maps`` (``docs/plans.md``).
 
-    ``quick``: a few cases (two scenes, one pulse, a 2 x 2 map, two time steps, shorter
-    runs) for tests and a first look.
+    ``quick``: a few cases (two scenes, one pulse, two time steps, shorter runs) for tests and a first look.
     """
     p = _paper_plans()[1 if quick else 0]
     return {k: dict(v) if isinstance(v, dict) else v for k, v in p.items()}

@@ -120,23 +120,11 @@ def pulse_shapes(v: Any) -> None:
         _shape_sign(*r)
 
 
-def a_values(v: Any) -> None:
-    vals = [_limit("A", x, "A") for x in _list(v, "A values")]
-    if len(set(vals)) != len(vals):
-        raise _Bad("distinct A values (a value given twice would run its cells twice)")
-
-
-def w_values(v: Any) -> None:
-    vals = [_limit("W", x, "W") for x in _list(v, "W values")]
-    if len(set(vals)) != len(vals):
-        raise _Bad("distinct W values (a value given twice would run its cells twice)")
-
-
 def time_steps(v: Any) -> None:
     vals = [_number(x, _DT[0], _DT[1], lo_open=False, what="a time step [s]")
             for x in _list(v, "time steps [s]")]
     if len(set(vals)) != len(vals):
-        raise _Bad("distinct time steps")
+        raise _Bad("distinct time steps (a step given twice would run its cases twice)")
 
 
 def dt_case(v: Any) -> None:
@@ -269,12 +257,6 @@ KEYS: tuple[PlanKey, ...] = (
             pulse_shapes),
     PlanKey("campaign", "pulse_tail", "s", f"(0, {_SECONDS:g}]", "6",
             "free rocking after each pulse window (6 T_g)", seconds),
-    PlanKey("campaign", "map_scene", "", "a scene of the plan", "the first scene",
-            "the scene of the summary map", scene_ref),
-    PlanKey("campaign", "map_A", "-", "distinct A values", _DERIVED,
-            "A of the summary map (symmetric pulse +)", a_values),
-    PlanKey("campaign", "map_W", "-", "distinct W values", "1.5, 2, 3, 4, 6",
-            "W of the summary map", w_values),
     PlanKey("campaign", "dt_sweep", "s", f"distinct time steps in [{_DT[0]:g}, {_DT[1]:g}]",
             "2e-3, 1e-3, 5e-4, 2e-4", "the engines' time steps of the speed-against-accuracy "
             "sweep", time_steps),
@@ -331,12 +313,6 @@ KEYS: tuple[PlanKey, ...] = (
             "--quick: the pulses", pulse_shapes),
     PlanKey("quick", "pulse_tail", "s", f"(0, {_SECONDS:g}]", "2", "--quick: the pulse tail",
             seconds),
-    PlanKey("quick", "map_A", "-", "distinct A values", "every fourth", "--quick: map A",
-            a_values),
-    PlanKey("quick", "map_W", "-", "distinct W values", "the third", "--quick: map W",
-            w_values),
-    PlanKey("quick", "map_duration_tail", "s", f"(0, {_SECONDS:g}]", "2",
-            "--quick: free rocking after a map cell's pulse", seconds),
     PlanKey("quick", "dt_sweep", "s", "distinct time steps", "the second and third",
             "--quick: the time steps", time_steps),
     PlanKey("quick", "dt_tail", "s", f"(0, {_SECONDS:g}]", "2",
@@ -413,7 +389,7 @@ def check_plan(data: Mapping[str, Any], source: str, *,
 def _scene_refs(c: Mapping[str, Any]) -> list[tuple[str, str]]:
     """(key, scene reference) of every scene a checked plan names."""
     out = [("scenes", s) for s in c.get("scenes", ())]
-    for k in ("map_scene", "choice_scene", "stress_scene", "stress_hybrid_scene"):
+    for k in ("choice_scene", "stress_scene", "stress_hybrid_scene"):
         if c.get(k) is not None:
             out.append((k, c[k]))
     if "dt_case" in c:
@@ -439,7 +415,7 @@ def resolve_scenes(c: Mapping[str, Any], folder: str | Path) -> dict[str, Any]:
     for k in ("scenes",):
         if k in out:
             out[k] = [fix(x) for x in out[k]]
-    for k in ("map_scene", "choice_scene", "stress_scene", "stress_hybrid_scene"):
+    for k in ("choice_scene", "stress_scene", "stress_hybrid_scene"):
         if out.get(k) is not None:
             out[k] = fix(out[k])
     if "dt_case" in out:

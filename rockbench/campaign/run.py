@@ -38,29 +38,23 @@ import math
 import os
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from ..report import campaign_page as P
 from ..report import tables as T
-from ..report.conclusions import campaign_conclusion
 from ..report.tables import CAMPAIGN_COLUMNS
 from ..result import motion_label
 from ..runner import REFERENCE, resolve_engines
 from ..scene.records import bundled_dir, find_records
 from ..sweep import store as S
 from .plan import campaign_plan
-from ..sweep.executors import check_options, cpu_count, execute
+from ..sweep.executors import check_options, execute
 
-__all__ = [
-    "CAMPAIGN_COLUMNS",
-    "campaign_plan",
-    "code_fingerprint",
-    "find_records",
-    "run_campaign",
-]
+__all__ = ["CAMPAIGN_COLUMNS", "CampaignTables", "campaign_plan", "code_fingerprint",
+           "find_records", "measure_campaign", "run_campaign", "write_tables"]
 
 code_fingerprint = S.code_fingerprint
 
@@ -221,38 +215,63 @@ def _sweep(cases: list[dict[str, Any]], *, store: Path | None, **run: Any) -> pd
 # ==========================================================================================
 # run_campaign
 # ==========================================================================================
-def _engine_versions() -> dict[str, str]:
-    """Backend name -> engine version, or why it is unavailable (the page's versions)."""
-    from ..engines import engine_info
-
-    return {r["name"]: (r.get("version") if r["available"]
-                        else f"unavailable: {r.get('reason', '')}") for r in engine_info()}
-
-
 def _scene_label(ref: Any) -> str:
     from .maps import scene_label
 
     return scene_label(ref)
 
 
-def _all_frames(scenes) -> bool:
-    """Whether every scene is a frame (the findings then say "frames", else "structures")."""
-    from ..scene import load_scene
+@dataclass
+class CampaignTables:
+    """What a campaign measured, handed to its page and its files in one object
+    (:func:`rockbench.campaign.page.write_page`): the plan, the engines and their states, the
+    comparison payloads, every table of ``docs/report.md``, the maps, the decision, fragility,
+    the notes and the run's timings."""
 
-    return all(hasattr(load_scene(s).structure, "column_height_left") for s in scenes)
+    plan: dict[str, Any]
+    names: list[str]
+    states: list[dict[str, Any]]
+    payloads: list[dict[str, Any]]
+    dt_payloads: list[dict[str, Any]]
+    metrics: pd.DataFrame
+    eta: pd.DataFrame
+    eta_summary: pd.DataFrame
+    engines: pd.DataFrame
+    speed: pd.DataFrame
+    records: pd.DataFrame
+    maps: dict[str, Any]
+    choice: dict[str, Any]
+    fragility: dict[str, Any]
+    notes: list[str]
+    labels: dict[str, str]
+    timings: dict[str, float]
+    quick: bool
+    records_dir: Any
+    store_dir: Path
+    fingerprint: str
+    paper: bool
+    t_start: float = field(default_factory=time.perf_counter)
 
+    @property
+    def missing(self) -> list[str]:
+        """The engines of the selection that are not installed here."""
+        return [r["name"] for r in self.states if r["state"] == "not installed"]
 
-def _hybrid(scenes) -> dict[str, bool]:
-    """Scene name -> whether it has devices (tendons, dampers)."""
-    from ..scene import load_scene
-
-    out = {}
-    for s in scenes:
-        try:
-            out[s] = out[_scene_label(s)] = load_scene(s).devices is not None
-        except Exception:  # not loadable here: judged by its name in the conclusion
-            pass
-    return out
+    def files(self) -> dict[str, pd.DataFrame]:
+        """The CSV tables of the campaign, by file name (``docs/report.md``)."""
+        out = {"metrics.csv": self.metrics, "eta.csv": self.eta,
+               "eta_summary.csv": self.eta_summary, "engines.csv": self.engines,
+               "speed_accuracy.csv": self.speed, "map_agreement.csv": self.maps["agreement"],
+               "tradeoff.csv": self.choice["tradeoff"], "advice.csv": self.choice["advice"]}
+        if len(self.records):
+            out["record_peaks.csv"] = self.records
+        if self.fragility.get("frames"):
+            from .fragility import section_table
+            out["fragility.csv"] = section_table(self.fragility)
+        if self.choice.get("stress") is not None:
+            out["stress.csv"] = self.choice["stress"]
+            out["stress_breaking_points.csv"] = self.choice["breaks"]
+        return out
 
 
 def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[str] | None = None,
@@ -262,39 +281,74 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                  workers: int | None = None, full: bool = False,
                  scenes: Sequence[Any] | None = None,
                  plan: str | os.PathLike | Mapping[str, Any] | None = None) -> Path:
-    """Run the default campaign (module docstring) and write its report; return the path of
-    ``out_dir/index.html``.
+    """Run a campaign and write its report; return the path of ``out_dir/index.html``.
 
     Parameters
     ----------
     out_dir : folder written: ``index.html``, the CSV tables (``docs/report.md``), the figures
         as PNG under ``figures/``.
     engines : backend names (default: every available backend; the analytic reference always
-        runs). Unavailable ones are listed on the page and skipped.
+        runs). Every registered engine appears on the page with its state.
     records_dir : a folder of records (``.AT2`` files, or headerless files listed in a
         ``records.csv`` with their dt): the peak rotation per record (paper Fig. 9), with the
-        analytic model's sensitivity band of each (``rockbench.studies.sensitivity``). Default: the
-        records bundled in the package (``rockbench/records``, ``docs/records.md``), except
-        with ``quick``.
-    quick : a few cases only (tests, a first look; well under a minute).
-    progress : tqdm progress bars naming what runs.
-    store : folder of the resumable store (default ``out_dir/store``); finished cases are
-        reused on a rerun.
+        analytic model's sensitivity band of each. Default: the records bundled in the package
+        (``rockbench/records``), except with ``quick``.
+    quick : the quick form of the plan: a few cases, the quick evidence, the fast engines'
+        maps only, no stability sweep or fragility; it still decides.
+    progress : progress bars naming what runs.
+    store : folder of the resumable store (default ``out_dir/store``).
     executor : "process" (local process pool, one worker per core), "serial", or "dask"
         (``dask_address``: a running scheduler; none: a local cluster).
     workers : worker processes (default: one per available core).
-    full : the long campaign: every engine's overturning map at 12 x 12 x 4 on both map
-        scenes, measured into ``out_dir/engine-maps`` (:mod:`rockbench.campaign.maps`: the
-        default reuses those maps after re-running sample cells of each) and the full form of
-        the stability sweep of every engine (:mod:`rockbench.campaign.choice`; the default runs
-        its fast form); the default keeps ``make report`` within its budget. Everything is
-        kept in the store and reused.
+    full : the long campaign: every engine's map at the plan's full grid, measured into
+        ``out_dir/engine-maps`` where it is missing or stale, the next larger evidence and the
+        full stability sweep. Everything is kept in the store and reused.
     scenes : the structures to report on (built-in names, TOML paths or Scenes; the first one
         is the structure the decision is about): the campaign's plan is derived from them
         (:func:`rockbench.campaign.plan.plan_for_scenes`). Default: the paper's plan.
     plan : a plan file (``kind = "campaign-plan"``, :func:`rockbench.campaign.plan.load_plan`)
         or a plan mapping; overrides ``scenes``.
     """
+    from .page import write_page
+
+    t = measure_campaign(out_dir, engines=engines, records_dir=records_dir, quick=quick,
+                         progress=progress, store=store, executor=executor,
+                         dask_address=dask_address, workers=workers, full=full, scenes=scenes,
+                         plan=plan)
+    out = Path(out_dir)
+    write_tables(t, out)
+    return write_page(t, out)
+
+
+def write_tables(t: CampaignTables, out: Path) -> list[Path]:
+    """Write the campaign's CSV tables into ``out``; an undocumented column with no value
+    (left by rows a reused store kept from older code) is not written, so that the files do
+    not depend on the store's history."""
+    from ..comparison import ETA_COLUMNS, METRIC_COLUMNS
+    from ..studies.tradeoff_tables import TABLE_COLUMNS
+
+    paths = []
+    for name, df in t.files().items():
+        doc = CAMPAIGN_COLUMNS.get(name)
+        if doc is not None:
+            kept = {*doc, *METRIC_COLUMNS, *ETA_COLUMNS, *TABLE_COLUMNS}
+            df = df.drop(columns=[c for c in df.columns if c not in kept and df[c].isna().all()])
+        df.to_csv(out / name, index=False)
+        paths.append(out / name)
+    return paths
+
+
+def measure_campaign(out_dir: str | os.PathLike = "reports", *,
+                     engines: Sequence[str] | None = None,
+                     records_dir: str | os.PathLike | None = None, quick: bool = False,
+                     progress: bool = True, store: str | os.PathLike | None = None,
+                     executor: str = "process", dask_address: str | None = None,
+                     workers: int | None = None, full: bool = False,
+                     scenes: Sequence[Any] | None = None,
+                     plan: str | os.PathLike | Mapping[str, Any] | None = None
+                     ) -> CampaignTables:
+    """Run every part of a campaign (:func:`run_campaign`'s parameters) and return what it
+    measured."""
     from ..engines import check_required, engine_states
 
     t_start = time.perf_counter()
@@ -305,8 +359,6 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     states = engine_states(resolve_engines(engines) if engines is not None else None)
     names = [REFERENCE] + [r["name"] for r in states
                            if r["state"] == "ran" and r["name"] != REFERENCE]
-    absent = [r for r in states if r["state"] != "ran" and r["name"] != REFERENCE]
-    missing = [r["name"] for r in absent if r["state"] == "not installed"]
     fragility_records = records_dir      # None: the fragility section's own ensemble
     if records_dir is None and not quick:
         records_dir = bundled_dir()       # the public-domain records shipped in the package
@@ -327,11 +379,11 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
     paper = plan["scenes"] == campaign_plan(quick)["scenes"]
     store_dir = Path(store) if store is not None else out / "store"
     fingerprint = code_fingerprint()
-    cache = store_dir / fingerprint / "comparisons"
+    cache = S.store_path(store_dir, "comparisons")
     notes: list[str] = []
-    sweep_store = store_dir / fingerprint / "cases" if S.have_pyarrow() else None
+    sweep_store = S.store_path(store_dir, "cases") if S.have_pyarrow() else None
     if sweep_store is None:
-        notes.append("pyarrow is not installed: the sweep cases (map, records) are not kept "
+        notes.append("pyarrow is not installed: the sweep cases (records) are not kept "
                      "between runs (pip install 'rockbench[parquet]').")
     run = dict(executor=executor, dask_address=dask_address, progress=progress,
                workers=workers)
@@ -362,7 +414,7 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
             notes.append(f"{p['label']} failed: {p['error']}")
     payloads = [p for p in payloads if "error" not in p]
 
-    # 4: speed against accuracy ------------------------------------------------------------
+    # 3: speed against accuracy ------------------------------------------------------------
     t = time.perf_counter()
     dc = plan["dt_case"]
     dur = _pulse_duration(dc["scene"], dc["A"], dc["W"], dc["shape"], plan["dt_tail"])
@@ -376,32 +428,17 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
          "reason": p["error"]} if "error" in p else p["row"] for p in dt_payloads)
     timings["speed"] = time.perf_counter() - t
 
-    # 3: overturning map -----------------------------------------------------------------
-    t = time.perf_counter()
-    from ..sweep import pulse_grid
-
-    map_cases = []
-    for A in plan["map_A"]:
-        for W in plan["map_W"]:
-            d = _pulse_duration(plan["map_scene"], A, W, "symmetric", plan["map_duration_tail"])
-            map_cases += pulse_grid(plan["map_scene"], "symmetric", 1, [A], [W], names,
-                                    duration=d)
-    omap = T.sweep_rows(_sweep(map_cases, store=sweep_store, **run))
-    if len(omap):
-        omap = T.with_verdicts(omap, ("A", "W"))
-    timings["map"] = time.perf_counter() - t
-
-    # 3b: overturning maps at the paper's resolution (paper Figs. 4-7) ------------------------
+    # 4: overturning maps at the paper's resolution (paper Figs. 4-7) ------------------------
     t = time.perf_counter()
     from .maps import run_maps
 
-    maps = run_maps(names, store_dir / fingerprint / "maps", full=full, quick=quick,
+    maps = run_maps(names, S.store_path(store_dir, "maps"), full=full, quick=quick,
                     measured=Path(out_dir) / "engine-maps", progress=progress,
                     workers=workers,
                     scheduler=dask_address if executor == "dask" else None, maps=plan["maps"])
     timings["maps"] = time.perf_counter() - t
 
-    # 3c: choosing a modelling approach (work-precision, advice, stability) -----------------
+    # 5: choosing a modelling approach (the decision, the stability sweep) -----------------
     t = time.perf_counter()
     from .choice import run_choice
 
@@ -412,14 +449,14 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                         evidence=plan.get("choice_evidence", "quick"))
     timings["choice"] = time.perf_counter() - t
 
-    # 5: records ----------------------------------------------------------------------------
+    # 6: records ----------------------------------------------------------------------------
     t = time.perf_counter()
     records = pd.DataFrame()
     if records_dir is not None:
         records = _records(records_dir, plan, names, notes, store=sweep_store, **run)
     timings["records"] = time.perf_counter() - t
 
-    # 6: fragility over an ensemble of records (rockbench/campaign/fragility.py) ---------------
+    # 7: fragility over an ensemble of records ----------------------------------------------
     t = time.perf_counter()
     frag: dict[str, Any] = {}
     if not quick:
@@ -427,105 +464,26 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
 
         frag = fragility_section(plan["record_frames"], names, records=fragility_records,
                                  size="full" if full else "default",
-                                 store=store_dir / "fragility",
+                                 store=S.store_path(store_dir, "fragility", keyed=False),
                                  executor=executor, workers=workers, scheduler=dask_address,
                                  progress=progress)
     timings["fragility"] = time.perf_counter() - t
 
     # tables -----------------------------------------------------------------------------
-    t = time.perf_counter()
     metrics = T.metrics_table(payloads)
     eta, eta_summary = T.eta_tables(payloads)
-    labels = {r: _scene_label(r) for r in dict.fromkeys([*plan["scenes"], plan["map_scene"]])}
-    for df in (metrics, eta, eta_summary, omap, records):   # a scene by its name, not its file
+    labels = {r: _scene_label(r) for r in dict.fromkeys(plan["scenes"])}
+    for df in (metrics, eta, eta_summary, records):    # a scene by its name, not its file
         if "scene" in df:
             df["scene"] = df["scene"].map(lambda r: labels.get(r, r))
-    engines_tab = T.engine_summary(metrics, eta_summary, speed, omap)
-    files = {"metrics.csv": metrics, "eta.csv": eta, "eta_summary.csv": eta_summary,
-             "engines.csv": engines_tab, "speed_accuracy.csv": speed,
-             "overturning_map.csv": omap, "map_agreement.csv": maps["agreement"],
-             "tradeoff.csv": choice["tradeoff"], "advice.csv": choice["advice"]}
-    if len(records):
-        files["record_peaks.csv"] = records
-    if frag.get("frames"):
-        from .fragility import section_table
-        files["fragility.csv"] = section_table(frag)
-    if choice.get("stress") is not None:
-        files["stress.csv"] = choice["stress"]
-        files["stress_breaking_points.csv"] = choice["breaks"]
-    from ..comparison import ETA_COLUMNS, METRIC_COLUMNS
-    for name, df in files.items():
-        # an undocumented column with no value (left by rows a reused store kept from older
-        # code) is not written: the files do not depend on the store's history
-        doc = CAMPAIGN_COLUMNS.get(name)
-        if doc is not None:
-            kept = {*doc, *METRIC_COLUMNS, *ETA_COLUMNS}     # "(then)": the metric columns
-            df = df.drop(columns=[c for c in df.columns if c not in kept and df[c].isna().all()])
-        df.to_csv(out / name, index=False)
-    lines = campaign_conclusion(engines_tab, metrics, eta_summary, speed, omap, records,
-                                hybrid=_hybrid(plan["scenes"]),
-                                map_scene=_scene_label(plan["map_scene"]),
-                                noun="frames" if _all_frames(plan["scenes"]) else "structures")
-    # the recommendation first (measured advice, CPU time), then the evidence; the median-
-    # based "closest" and the load-dependent "fastest" headlines give way to it
-    from ..report.decision import decision_sentences
-
-    decision = choice.get("decision")
-    words = decision_sentences(choice["advice"], choice.get("scene", "the structure"),
-                               next_steps=decision.next_steps if decision else None)
-    lines = words + maps["words"] + [
-        x for x in lines if not x.startswith(("Closest to the analytic model", "Fastest engine"))]
-
-    # page -------------------------------------------------------------------------------
-    sections = P.page_sections(dict(plan, labels=labels), names, missing, payloads, metrics, eta, eta_summary,
-                               engines_tab, speed, omap, records, lines, notes, out / "figures",
-                               quick=quick, records_dir=records_dir, store_dir=store_dir,
-                               fingerprint=fingerprint, engine_versions=_engine_versions(),
-                               files=list(files), engine_states=states)
-    from ..report.choice_page import choice_html, work_precision_html
-    from ..report.decision import decision_html, evidence_note
-    from ..report.maps_page import maps_html
-
-    mp = plan["maps"]
-    g = (12, 12) if quick else mp["analytic_grid"]           # what run_maps ran
-    sections["choice-section"] = ("Choosing a modelling approach",
-                                  choice_html(choice, out / "figures", with_work_precision=False))
-    sections["maps-section"] = (
-        "Overturning maps" + (" (paper Figs. 4-7)" if paper else ""), maps_html(
-            maps, out / "figures",
-            analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
-                          f"W in {mp['analytic_frequency']}, pulse window + 10 s",
-            axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
-                 f"+ {mp['engine_tail']:g} s", paper=paper))
-    if frag:                                   # report/fragility_figures.py
-        from ..report.fragility_figures import fragility_html
-        sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)" if paper
-                                                                     else ""),
-                                         fragility_html(frag, out / "figures"))
-    # the decision first (report/decision.py): the advice, one row per engine, work-precision
-    scene_word = choice.get("scene", "the structure")
-    from .plan import structure_table
-
-    sections["decision-section"] = ("Which engine and settings", decision_html(
-        choice["advice"], scene=scene_word, structure=plan.get("description", ""),
-        structures=None if paper else structure_table(plan["scenes"]),
-        agreement=maps["agreement"], eta_summary=eta_summary, breaks=choice.get("breaks"),
-        next_steps=decision.next_steps if decision else None,
-        notes=[n for n in [evidence_note(choice.get("tradeoff"),
-                                         size=choice.get("evidence", "quick"),
-                                         coverage=decision.coverage if decision else None,
-                                         cpu_s=decision.cpu_s if decision else None)] if n],
-        work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
-    timings["report"] = time.perf_counter() - t
-    total = time.perf_counter() - t_start
-    cpu = sum(float(p.get("cpu_s", 0.0)) for p in payloads + dt_payloads)
-    sections["runtime-section"] = ("Run time", P.runtime_html(timings, total,
-                                                              workers or cpu_count(), cpu))
-    path = out / "index.html"
-    path.write_text(P.render(P.ordered(sections), quick=quick, with_records=bool(len(records)),
-                             about=None if paper else plan.get("description", "")),
-                    encoding="utf-8")
-    return path
+    engines_tab = T.engine_summary(metrics, eta_summary, speed, maps["agreement"])
+    return CampaignTables(plan=dict(plan, labels=labels), names=names, states=states,
+                          payloads=payloads, dt_payloads=dt_payloads, metrics=metrics, eta=eta,
+                          eta_summary=eta_summary, engines=engines_tab, speed=speed,
+                          records=records, maps=maps, choice=choice, fragility=frag,
+                          notes=notes, labels=labels, timings=timings, quick=quick,
+                          records_dir=records_dir, store_dir=store_dir,
+                          fingerprint=fingerprint, paper=paper, t_start=t_start)
 
 
 def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],

@@ -157,7 +157,8 @@ def agreement_words(ag: dict) -> str:
                   ag["fraction"], "kappa": ag["kappa"],
                   "not_ok": ag.get("not_ok_first", 0) + ag.get("not_ok_second", 0),
                   "only_first": ag.get("cells_first", common) - common,
-                  "only_second": ag.get("cells_second", common) - common})
+                  "only_second": ag.get("cells_second", common) - common},
+                 against="the first map")
 
 
 def _same_structure(first: str, second: str) -> None:

@@ -132,20 +132,20 @@ def engines_state_html(states) -> str:
     return H.html_table(rows, ["engine", "state", "detail"])
 
 
-def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, engines_tab,
-                  speed, omap, records, lines, notes, figdir, *, quick, records_dir, store_dir,
-                  fingerprint, engine_versions, files, engine_states=()
-                  ) -> dict[str, tuple[str, str]]:
-    """The sections (id -> (title, html)) of the campaign page that its tables and comparison
-    payloads (each with a ``label``) make; figures are written under ``figdir``. The campaign
-    adds its other parts' sections and :func:`ordered` puts them in place.
-
-    ``plan``: the campaign plan (:func:`rockbench.sweep.cases.campaign_plan`); ``names``: the
-    backends that ran, ``missing``: those not available; ``lines``: the conclusion; ``notes``:
-    skipped records and failed cases; ``fingerprint``: the store's code fingerprint;
+def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tuple[str, str]]:
+    """The sections (id -> (title, html)) of the campaign page that a campaign's tables ``t``
+    make (:class:`rockbench.campaign.run.CampaignTables`, read by attribute: ``plan``,
+    ``names``, ``states``, ``payloads`` (each with a ``label``), ``metrics``, ``eta_summary``,
+    ``engines``, ``speed``, ``records``, ``notes``, ``quick``, ``records_dir``, ``store_dir``,
+    ``fingerprint``); figures are written under ``figdir``. The campaign adds its other parts'
+    sections and :func:`ordered` puts them in place. ``lines``: the findings in words;
     ``engine_versions``: backend name -> version (or why it is unavailable); ``files``: the
-    CSV files written; ``engine_states``: every registered backend's state in this run
-    (name, state, detail: ran, not installed with why and the remedy, left out by an option)."""
+    CSV files written."""
+    plan, names, payloads = t.plan, t.names, t.payloads
+    metrics, eta_summary, engines_tab = t.metrics, t.eta_summary, t.engines
+    speed, records, notes = t.speed, t.records, t.notes
+    quick, records_dir, store_dir = t.quick, t.records_dir, t.store_dir
+    fingerprint, engine_states = t.fingerprint, t.states
     units = {**METRIC_COLUMNS, **DERIVED_COLUMNS}
     names_of = plan.get("labels") or {}         # scene reference -> the scene's own name
 
@@ -280,21 +280,6 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
     sections["speed-section"] = ("Speed against accuracy", "\n".join(sp) or
                      "<p>No engine besides the analytic reference.</p>")
 
-    # map
-    mp = []
-    if len(omap):
-        mp.append(H.figure_html(
-            F.plot_overturn_maps(omap, title=f"Overturning map: {_label(plan['map_scene'])}, positive "
-                                             f"symmetric Ricker pulses"),
-            "Overturning verdicts on the (W, A) plane, W = omega_g / p [-], "
-            "A = a_g / (g tan alpha) [-]: filled squares overturn, open circles survive; a "
-            "black ring marks an engine verdict that differs from the analytic one.",
-            name="overturning_map", png_dir=figdir))
-        mp.append("<details><summary>map points (table)</summary>" + H.html_table(
-            omap, list(CAMPAIGN_COLUMNS["overturning_map.csv"]), units=units, scroll=True)
-            + "</details>")
-    sections["map-section"] = ("Overturning map", "\n".join(mp) or "<p>No map.</p>")
-
     # records
     if len(records):
         sections["records-section"] = ("Records (paper Fig. 9)", H.figure_html(
@@ -320,8 +305,6 @@ def page_sections(plan, names, missing, payloads, metrics, eta, eta_summary, eng
              ("pulse run length", f"pulse window (6 T_g) + {plan['pulse_tail']:g} s"),
              ("free rocking", f"phi0 = {plan['free_phi0']:g} alpha, "
                               f"{plan['free_duration']:g} s"),
-             ("overturning map", f"{plan['map_scene']}, symmetric +1, A in "
-                                 f"{list(plan['map_A'])}, W in {list(plan['map_W'])}"),
              ("time steps [s]", ", ".join(f"{d:g}" for d in plan["dt_sweep"])),
              ("records folder", str(records_dir) if records_dir else "none"),
              ("quick", str(bool(quick))), ("store", str(store_dir)),

@@ -44,7 +44,6 @@ __all__ = [
     "plot_eta_summary",
     "plot_histories",
     "plot_history_grid",
-    "plot_overturn_maps",
     "plot_record_peaks",
     "plot_speed_accuracy",
     "plot_summary_table",
@@ -489,64 +488,6 @@ def plot_speed_accuracy(df: pd.DataFrame, *, error: str = "nrmse",
         ax.grid(True, which="both", lw=0.3, alpha=0.5)
         ax.legend(fontsize=8, loc="best")
     axes[0].set_ylabel(label + "\n(down = more accurate)")
-    if title:
-        fig.suptitle(title, fontsize=10)
-    return fig
-
-
-# ------------------------------------------------------------------------------------------
-# Overturning maps
-# ------------------------------------------------------------------------------------------
-def plot_overturn_maps(df: pd.DataFrame, *, title: str | None = None) -> Figure:
-    """Overturning maps on the (W, A) plane, one panel per backend.
-
-    ``df`` columns: backend, A [-] (a_g / (g tan alpha)), W [-] (omega_g / p), overturned
-    (bool), status, and optionally max_abs_phi_over_alpha [-]. Filled red squares: overturned;
-    open green circles: survived; a thick black ring marks an engine point whose verdict
-    differs from the analytic one at the same (A, W); grey crosses: runs not ok.
-    """
-    backends = _order(df["backend"]) if len(df) else ["analytic"]
-    n = len(backends)
-    ncols = min(n, 4)
-    nrows = int(math.ceil(n / ncols))
-    fig = Figure(figsize=(3.6 * ncols + 0.4, 3.4 * nrows + 0.8), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False, sharex=True,
-                                      sharey=True)).ravel()
-    ref = df[df["backend"] == "analytic"] if len(df) else df
-    ref_verdict = {(round(float(a), 9), round(float(w), 9)): bool(o)
-                   for a, w, o in zip(ref.get("A", []), ref.get("W", []),
-                                      ref.get("overturned", []))}
-    for ax, name in zip(axes, backends):
-        s = df[df["backend"] == name] if len(df) else df
-        ok = s["status"].fillna("ok").eq("ok") if "status" in s else pd.Series(True, s.index)
-        good = s[ok]
-        ot = good[good["overturned"].astype(bool)]
-        safe = good[~good["overturned"].astype(bool)]
-        ax.scatter(safe["W"], safe["A"], marker="o", facecolors="none",
-                   edgecolors="#2e7d32", s=40, label="survives")
-        ax.scatter(ot["W"], ot["A"], marker="s", color="#c62828", s=40, label="overturns")
-        bad = s[~ok]
-        if len(bad):
-            ax.scatter(bad["W"], bad["A"], marker="x", color="0.5", s=40, label="not ok")
-        n_dis = 0
-        if name != "analytic":
-            dis = [(w, a) for a, w, o in zip(good["A"], good["W"], good["overturned"])
-                   if (round(float(a), 9), round(float(w), 9)) in ref_verdict
-                   and ref_verdict[(round(float(a), 9), round(float(w), 9))] != bool(o)]
-            n_dis = len(dis)
-            if dis:
-                ax.scatter([d[0] for d in dis], [d[1] for d in dis], marker="o",
-                           facecolors="none", edgecolors="k", linewidths=2.0, s=150,
-                           label="differs from analytic")
-        sub = f"{name}" + ("" if name == "analytic" else
-                           f": {n_dis} of {len(good)} verdicts differ")
-        ax.set_title(sub, fontsize=9)
-        ax.set_xlabel("W = omega_g / p [-]")
-        ax.set_ylabel("A = a_g / (g tan alpha) [-]")
-        ax.grid(True, lw=0.3, alpha=0.5)
-        ax.legend(fontsize=7, loc="lower right")
-    for ax in axes[n:]:
-        ax.set_visible(False)
     if title:
         fig.suptitle(title, fontsize=10)
     return fig

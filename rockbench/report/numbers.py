@@ -102,4 +102,11 @@ def render_block(name: str, root: str | Path) -> str:
     """The Markdown of README block ``name`` from the results under ``root`` (the repository)."""
     if name not in BLOCKS:
         raise KeyError(f"no generated block {name!r}: one of {', '.join(BLOCKS)}")
-    return BLOCKS[name](Path(root))
+    try:
+        return BLOCKS[name](Path(root))
+    except KeyError as e:        # a results file written by older code lacks a column
+        from ..errors import RockbenchError
+
+        raise RockbenchError(f"README block {name!r}: the results under {Path(root) / 'reports'} "
+                             f"lack the column {e.args[0]!r} (written by older code): run "
+                             "`make report`, then `make docs`") from None

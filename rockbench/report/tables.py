@@ -52,8 +52,8 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "peak_rel_error_max": "-, largest |peak_rel_error|",
         "eta_mean_rel_error": "-, free rocking: mean over scenes and directions of "
                               "|eta_mean / eta_ref - 1|",
-        "verdicts_agree": "-, pulse cases and map points whose overturning verdict agrees",
-        "verdicts_total": "-, pulse cases and map points compared",
+        "verdicts_agree": "-, pulse cases and map cells whose overturning verdict agrees",
+        "verdicts_total": "-, pulse cases and map cells compared",
         "energy_gained": "-, pulse cases with energy gained at an impact",
         "real_time_factor_median": "-, median real-time factor (stepping only)",
         "run_real_time_factor_median": "-, median real-time factor of the whole run (speed "
@@ -67,11 +67,34 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "sim_time": "s, simulated time",
         "ref_real_time_factor": "-, the analytic reference on the same case (integration only)",
         "ref_run_real_time_factor": "-, the analytic reference, whole run"},
-    "overturning_map.csv": {
-        "backend": "-", "scene": "-", "shape": "-", "sign": "-", "A": "-", "W": "-",
-        "status": "-", "overturned": "-, bool", "overturned_ref": "-, analytic verdict",
-        "verdict_agrees": "-, bool", "max_abs_phi_over_alpha": "-",
-        "real_time_factor": "-"},
+    "map_agreement.csv": {
+        "scene": "-", "backend": "-", "grid": "-, NA x NW x pulses of the engine's map",
+        "cells": "-, cells compared (ok in both maps)",
+        "differ": "-, of those, cells whose overturning verdict differs from the analytic one",
+        "agree_fraction": "-, (cells - differ) / cells", "kappa": "-, Cohen's kappa",
+        "engine_overturns_analytic_survives": "-, cells",
+        "analytic_overturns_engine_survives": "-, cells",
+        "boundary_shift_mean": "-, mean shift of the overturning boundary along A",
+        "boundary_shift_max_abs": "-, largest |shift| along A",
+        "not_ok": "-, cells not ok in either map (left out of cells)",
+        "near_boundary": "-, compared cells within 2 % in A of the analytic boundary",
+        "disagree_near_boundary": "-, differing cells near the boundary",
+        "disagree_away": "-, differing cells away from it",
+        "in_words": "-, the boundary's shift per pulse, in words"},
+    "tradeoff.csv": {"(then)": "every column of rockbench.studies.tradeoff.TABLE_COLUMNS "
+                               "(one row per engine and setting the decision's search ran)"},
+    "advice.csv": {
+        "tolerance": "-, relative error (0.02 = 2 %)", "rank": "-, 1 = recommended when it "
+        "meets the tolerance", "engine": "-",
+        "status": "-, the engine's fate (rockbench.fates: meets, fails held-out, not "
+                  "converged, dearer, not reached, diverged, not installed, left out)",
+        "recommended": "-, bool", "setting": "-, the setting (meets: the answer; otherwise the "
+        "closest one)", "worst_error_choice": "-, worst error on the choice part",
+        "worst_error_heldout": "-, worst error on the held-out part",
+        "cpu_per_sim_s": "s/s, steady process CPU s per simulated s",
+        "real_time_factor": "-, simulated s per CPU s", "erratic": "-, bool",
+        "tie_with_cheapest": "-, within 25 % of the cheapest confirmed cost",
+        "reason": "-, why, in words"},
     "record_peaks.csv": {
         "record": "-, file stem", "frame": "-, free-standing | hybrid", "scene": "-",
         "polarity": "-, +1 as recorded, -1 reversed", "backend": "-", "status": "-",
@@ -227,8 +250,10 @@ def speed_table(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
 
 
 def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.DataFrame,
-                   omap: pd.DataFrame) -> pd.DataFrame:
-    """``engines.csv``: one row per backend (columns: :data:`CAMPAIGN_COLUMNS`)."""
+                   agreement: pd.DataFrame | None = None) -> pd.DataFrame:
+    """``engines.csv``: one row per backend (columns: :data:`CAMPAIGN_COLUMNS`): the pulse
+    cases' errors and verdicts, and, from ``agreement`` (``map_agreement.csv``), the cells of
+    its maps whose verdict differs from the analytic one."""
     rows = []
     pulses = metrics[metrics["part"] == "pulse"] if len(metrics) else metrics
     backends = F._order(pulses["backend"]) if len(pulses) else []
@@ -241,10 +266,11 @@ def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.D
         er = es["rel_error"].astype(float).abs().dropna() if len(es) else pd.Series(dtype=float)
         va = ok["verdict_agrees"].dropna().astype(bool)
         n_agree, n_total = int(va.sum()), len(va)
-        if len(omap):
-            m = omap[(omap["backend"] == b)]["verdict_agrees"].dropna().astype(bool)
-            n_agree += int(m.sum())
-            n_total += len(m)
+        if agreement is not None and len(agreement):
+            a = agreement[agreement["backend"] == b]
+            n_total += int(a["cells"].sum())
+            n_agree += int(a["cells"].sum() - a["differ"].sum()) if "differ" in a else int(
+                round((a["cells"] * a["agree_fraction"]).sum()))
         sp = speed[speed["backend"] == b] if len(speed) else speed
         versions = s["engine_version"].dropna().astype(str)
         rows.append({

@@ -36,11 +36,12 @@ def share(part: int, whole: int) -> str:
 
 
 def agreement_words(row: Mapping[str, Any], *, engine: str | None = None,
-                    scene: str | None = None) -> str:
+                    scene: str | None = None, against: str = "the analytic map") -> str:
     """A map agreement in words, from a row with ``cells`` (compared: ok in both maps),
     ``differ`` (of those, different verdicts), ``kappa``; optionally ``not_ok`` (cells not ok,
     left out), ``only_first`` / ``only_second`` (cells held by one map only, left out),
-    ``near_boundary``, ``disagree_near_boundary``, ``disagree_away``, ``grid``."""
+    ``near_boundary``, ``disagree_near_boundary``, ``disagree_away``, ``grid``. ``against``:
+    the map compared with, in words."""
     n = int(_num(row.get("cells")) if math.isfinite(_num(row.get("cells"))) else 0)
     differ = row.get("differ")
     if differ is None or not math.isfinite(_num(differ)):
@@ -50,7 +51,7 @@ def agreement_words(row: Mapping[str, Any], *, engine: str | None = None,
     kappa = _num(row.get("kappa"))
     who = " ".join(x for x in (engine, f"on {scene}" if scene else None,
                                f"({row['grid']} cells)" if row.get("grid") else None) if x)
-    text = (f"{who + ': ' if who else ''}{differ} of {n} cells differ from the analytic map "
+    text = (f"{who + ': ' if who else ''}{differ} of {n} cells differ from {against} "
             f"({share(n - differ, n)} agree), Cohen's kappa "
             + (f"{kappa:.3f}" if math.isfinite(kappa) else
                "undefined (every cell has one verdict in both maps)"))

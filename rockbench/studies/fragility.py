@@ -177,8 +177,7 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     executor = executor or ("dask" if scheduler else "process")
     directory = None
     if store is not None:
-        directory = S.store_dir(store)
-        directory = directory / S.code_fingerprint() if keyed_by_code else directory
+        directory = S.store_path(store, "", keyed=keyed_by_code)
     rows = run_cases(cases, store=directory, executor=executor, workers=workers,
                      dask_address=scheduler, progress=progress, retry_errors=retry_errors)
     runs = _runs_frame(rows, ims, measure)

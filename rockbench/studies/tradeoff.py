@@ -318,9 +318,9 @@ def _item_key(item: dict[str, Any]) -> str:
 
 
 def _store_dir(store) -> Path:
-    from ..sweep.store import code_fingerprint, store_dir
+    from ..sweep.store import store_path
 
-    return store_dir(store) / code_fingerprint() / "tradeoff"
+    return store_path(store, "tradeoff")
 
 
 def _load_stored(directory: Path, k: str) -> dict[str, Any] | None:

@@ -118,6 +118,17 @@ def store_dir(store: str | os.PathLike) -> Path:
     return p
 
 
+def store_path(store: str | os.PathLike, kind: str, *, keyed: bool = True) -> Path:
+    """Where the results of one ``kind`` (``"cases"``, ``"maps"``, ``"tradeoff"``...) live.
+
+    ``<store>/<code fingerprint>/<kind>`` when ``keyed`` (results that a change of the
+    physics code invalidates), ``<store>/<kind>`` otherwise (stores whose rows carry
+    their own key).  ParameterError when ``store`` exists and is not a directory.
+    """
+    root = store_dir(store)
+    return root / code_fingerprint() / kind if keyed else root / kind
+
+
 def have_pyarrow() -> bool:
     try:
         import pyarrow  # noqa: F401

@@ -1,0 +1,104 @@
+"""A campaign's page: the sections its tables make (:func:`rockbench.report.campaign_page.
+page_sections`), the decision first (:mod:`rockbench.report.decision`), the maps, the choice,
+fragility and the run time, written as one self-contained ``index.html``. Reads the
+:class:`~rockbench.campaign.run.CampaignTables` only: nothing here runs a simulation."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from ..report import campaign_page as P
+from ..report.conclusions import campaign_conclusion
+from ..sweep.executors import cpu_count
+
+__all__ = ["write_page"]
+
+
+def _engine_versions() -> dict[str, str]:
+    """Backend name -> engine version, or why it is unavailable (the page's versions)."""
+    from ..engines import engine_info
+
+    return {r["name"]: (r.get("version") if r["available"]
+                        else f"unavailable: {r.get('reason', '')}") for r in engine_info()}
+
+
+def _all_frames(scenes) -> bool:
+    """Whether every scene is a frame (the findings then say "frames", else "structures")."""
+    from ..scene import load_scene
+
+    return all(hasattr(load_scene(s).structure, "column_height_left") for s in scenes)
+
+
+def _hybrid(scenes, labels: dict[str, str]) -> dict[str, bool]:
+    """Scene name -> whether it has devices (tendons, dampers)."""
+    from ..scene import load_scene
+
+    out = {}
+    for s in scenes:
+        try:
+            out[s] = out[labels.get(s, s)] = load_scene(s).devices is not None
+        except Exception:  # noqa: BLE001 - not loadable here: judged by its name
+            pass
+    return out
+
+
+def write_page(t: Any, out: Path) -> Path:
+    """Write ``out/index.html`` (and its figures under ``out/figures``) from a campaign's
+    tables ``t``; return the page's path."""
+    from ..report.choice_page import choice_html, work_precision_html
+    from ..report.decision import decision_html, decision_sentences, evidence_note
+    from ..report.maps_page import maps_html
+    from .plan import structure_table
+
+    w0 = time.perf_counter()
+    plan, choice, maps = t.plan, t.choice, t.maps
+    decision = choice.get("decision")
+    scene_word = choice.get("scene", "the structure")
+    lines = campaign_conclusion(t.engines, t.metrics, t.eta_summary, t.speed, t.records,
+                                hybrid=_hybrid(plan["scenes"], t.labels),
+                                noun="frames" if _all_frames(plan["scenes"]) else "structures")
+    # the decision first (measured, CPU time), then the maps' agreement, then the evidence
+    words = decision_sentences(choice["advice"], scene_word,
+                               next_steps=decision.next_steps if decision else None)
+    lines = words + maps["words"] + lines
+    sections = P.page_sections(t, lines, out / "figures", engine_versions=_engine_versions(),
+                               files=list(t.files()))
+    mp = plan["maps"]
+    g = (12, 12) if t.quick else mp["analytic_grid"]           # what run_maps ran
+    sections["choice-section"] = ("Choosing a modelling approach",
+                                  choice_html(choice, out / "figures", with_work_precision=False))
+    sections["maps-section"] = (
+        "Overturning maps" + (" (paper Figs. 4-7)" if t.paper else ""), maps_html(
+            maps, out / "figures",
+            analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
+                          f"W in {mp['analytic_frequency']}, pulse window + 10 s",
+            axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
+                 f"+ {mp['engine_tail']:g} s", paper=t.paper))
+    if t.fragility:
+        from ..report.fragility_figures import fragility_html
+        sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)"
+                                                                     if t.paper else ""),
+                                         fragility_html(t.fragility, out / "figures"))
+    sections["decision-section"] = ("Which engine and settings", decision_html(
+        choice["advice"], scene=scene_word, structure=plan.get("description", ""),
+        structures=None if t.paper else structure_table(plan["scenes"]),
+        agreement=maps["agreement"], eta_summary=t.eta_summary, breaks=choice.get("breaks"),
+        next_steps=decision.next_steps if decision else None,
+        notes=[n for n in [evidence_note(choice.get("tradeoff"),
+                                         size=choice.get("evidence", "quick"),
+                                         coverage=decision.coverage if decision else None,
+                                         cpu_s=decision.cpu_s if decision else None)] if n],
+        work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
+    timings = dict(t.timings, report=time.perf_counter() - w0)
+    total = time.perf_counter() - t.t_start
+    cpu = sum(float(p.get("cpu_s", 0.0)) for p in t.payloads + t.dt_payloads)
+    sections["runtime-section"] = ("Run time", P.runtime_html(timings, total,
+                                                              cpu_count(), cpu))
+    path = out / "index.html"
+    path.write_text(P.render(P.ordered(sections), quick=t.quick,
+                             with_records=bool(len(t.records)),
+                             about=None if t.paper else plan.get("description", "")),
+                    encoding="utf-8")
+    return path
