@@ -17,13 +17,12 @@ from typing import Any
 from .engines import REGISTRY, available_backends, get_backend
 from .engines.base import run_window
 from .errors import BackendUnavailable, ParameterError, check_finite, check_positive
+from .registry import REFERENCE  # the reference every metric is measured against
 from .result import Result
 from .scene.scene import Scene
 
 __all__ = ["REFERENCE", "run", "run_all", "info", "resolve_engines"]
 
-#: Name of the reference backend every metric is measured against.
-REFERENCE = "analytic"
 
 
 def run(scene: Scene, motion=None, *, engine: str = "analytic",

@@ -88,12 +88,16 @@ def test_engines_json(capsys):
     assert list(by_name) == rb.backend_names()
     assert by_name["analytic"]["available"] is True
     for r in rows:
-        assert ("version" in r) if r["available"] else ("reason" in r)
-    if "pymunk" in rb.available_backends():
-        import pymunk
+        assert ("version" in r) if r["available"] else ("reason" in r and "remedy" in r)
 
-        assert by_name["pymunk"]["available"] is True
-        assert pymunk.version in by_name["pymunk"]["version"]
+
+@needs_engine("pymunk")
+def test_engines_json_names_the_installed_version(capsys):
+    import pymunk
+
+    by_name = {r["name"]: r for r in cli_json(capsys, "engines")}
+    assert by_name["pymunk"]["available"] is True
+    assert pymunk.version in by_name["pymunk"]["version"]
 
 
 # --- run -------------------------------------------------------------------------------------

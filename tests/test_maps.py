@@ -148,8 +148,21 @@ def test_map_command_line(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["reused"] == 12
     assert main(["map", "paper-symmetric", "--store", str(store), "--grid", "2x2"]) == 2
     assert "other inputs" in capsys.readouterr().err
-    assert main(["map", "--compare", str(store), str(store), "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["kappa"] == 1.0
+    # a copy with one verdict flipped: the comparison finds that one cell and no other
+    import shutil
+
+    from rockbench.sweep.map_store import load_map, part_files, tidy_map, write_part
+
+    other = tmp_path / "flipped.parquet"
+    shutil.copytree(store, other)
+    df = load_map(other)
+    for p in part_files(other):
+        p.unlink()
+    df.loc[df.index[0], "overturned"] = not bool(df.loc[df.index[0], "overturned"])
+    write_part(other, tidy_map(df))
+    assert main(["map", "--compare", str(store), str(other), "--json"]) == 0
+    ag = json.loads(capsys.readouterr().out)
+    assert (ag["n"], ag["differ"]) == (12, 1) and ag["kappa"] < 1.0
     assert main(["map", "paper-asymmetric", "--grid", "0x4"]) == 2
 
 

@@ -286,7 +286,7 @@ def test_the_quick_report_on_the_gateway_is_about_it(gateway, tmp_path):
 def test_findings_call_a_block_a_structure_not_a_frame(gateway, cabinet):
     """With the cabinet (a block) in the report, the findings grouped it under "free-standing
     frames"."""
-    from rockbench.campaign.run import _all_frames
+    from rockbench.campaign.page import _all_frames
     from rockbench.report.conclusions import _groups
 
     assert _all_frames([gateway]) and not _all_frames([gateway, cabinet])

@@ -255,8 +255,8 @@ def test_quick_campaign_page(quick):
     assert figs == sorted(["histories_paper-asymmetric.png",
                            "histories_paper-asymmetric-hybrid-eps1.png", "eta_free_rocking.png",
                            "eta_per_impact.png", "speed_accuracy.png",
-                           "record_peaks.png", "map_paper-asymmetric_analytic.png",
-                           "map_paper-asymmetric_pymunk.png", "work_precision.png"])
+                           "record_peaks.png", "maps_analytic.png",
+                           "maps_paper-asymmetric_engines.png", "work_precision.png"])
     assert n == len(figs)
     for p in (path.parent / "figures").glob("*.png"):
         assert png_size(p.read_bytes())[0] > 100

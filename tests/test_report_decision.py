@@ -90,15 +90,18 @@ def test_decision_table_one_row_per_engine_every_fate_shown():
     eta = pd.DataFrame({"scene": ["x"] * 4, "backend": ["pymunk", "pymunk", "mujoco", "mujoco"],
                         "direction": [1, -1, 1, -1], "rel_error": [0.0007, -0.0021, 0.001, 0.0]})
     breaks = pd.DataFrame({"engine": ["pymunk"], "axis": ["dt"], "side": ["above"],
-                           "value": [0.01], "class": ["off"], "reason": ["sliding"]})
+                           "value": [0.01], "unit": ["s"], "class": ["off"],
+                           "reason": ["sliding 3.2 mm > 2 mm; more"]})
     t = decision_table(_advice(), agreement=agreement, eta_summary=eta, breaks=breaks, scene="x")
     assert set(t["engine"]) == {"pymunk", "mujoco", "opensees"}
     row = t.set_index("engine").loc["pymunk"]
-    assert row["within 2 %"] == "dt=0.0005: 0.0135 CPU s/s (1.68 % / 1.90 %)"
-    assert row["within 0.5 %"] == "not reached (1.38 % dt=0.00025)"
+    assert row["within 2 %"] == "dt=0.0005 · 0.013 CPU s/s · 1.68 % / 1.90 %"
+    assert row["within 0.5 %"] == "not reached (1.38 % at dt=0.00025)"
     assert row["map agreement"] == "13 of 40000 differ, kappa 0.996"
     assert row["free-rocking eta error (worst)"] == "0.21 %"
-    assert row["breaks first at"] == "dt 0.01 (off)"
+    # the axis's unit and the reason measured, not the footnote's generic one
+    assert row["breaks first at"] == "dt = 0.01 s: off (sliding 3.2 mm > 2 mm)"
+    assert t.set_index("engine").loc["mujoco", "breaks first at"] == "holds at every point tried"
     assert t.set_index("engine").loc["opensees", "within 0.5 %"] == "not installed"
 
 

@@ -5,6 +5,8 @@ differs from what this writes):
 * ``docs/cli.md`` - the block between ``<!-- generated: cli -->`` and ``<!-- /generated -->``:
   every command's ``--help``, from the parser itself;
 * ``docs/plans.md`` - the plan format, from :mod:`rockbench.campaign.plan_schema`;
+* ``docs/report.md`` - the block ``campaign-files``: the campaign's CSV files and their
+  columns, from :data:`rockbench.report.tables.CAMPAIGN_COLUMNS`;
 * ``README.md`` - the blocks ``<!-- generated: NAME -->`` ... ``<!-- /generated -->``, from the
   report's tables (``reports/*.csv``) and the benchmarks' results (``benchmarks/results``):
   :mod:`rockbench.report.numbers` renders each block.
@@ -66,10 +68,30 @@ def cli_examples() -> str:
     return "\n".join(out)
 
 
+def campaign_files() -> str:
+    """The campaign's CSV files and their columns with units, from
+    :data:`rockbench.report.tables.CAMPAIGN_COLUMNS` (the one place they are defined)."""
+    from rockbench.report.tables import CAMPAIGN_COLUMNS
+
+    out = []
+    for name, cols in CAMPAIGN_COLUMNS.items():
+        out.append(f"**`{name}`**\n")
+        for col, text in cols.items():
+            unit, _, meaning = text.partition(", ")
+            if col == "(then)":
+                out.append(f"* then {text}")
+            else:
+                out.append(f"* `{col}` [{unit}]" + (f": {meaning}" if meaning else ""))
+        out.append("")
+    return "\n".join(out)
+
+
 def blocks(name: str, root: Path = ROOT) -> str:
     """The text of one generated block."""
     if name == "cli":
         return cli_reference()
+    if name == "campaign-files":
+        return campaign_files()
     if name == "cli-examples":
         return cli_examples()
     from rockbench.report.numbers import render_block
@@ -96,7 +118,7 @@ def pages(root: Path = ROOT, *, examples: bool = False) -> dict[Path, str]:
     from rockbench.campaign.plan_schema import markdown as plans
 
     out = {root / "docs" / "plans.md": plans()}
-    for rel in ("README.md", "docs/cli.md"):
+    for rel in ("README.md", "docs/cli.md", "docs/report.md"):
         p = root / rel
         out[p] = fill(p.read_text(encoding="utf-8"), root, examples=examples)
     return out

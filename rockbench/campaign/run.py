@@ -114,7 +114,9 @@ def _run_job(job: dict[str, Any]) -> dict[str, Any]:
                    else math.inf,
                    ref_real_time_factor=float(ref.cost.real_time_factor),
                    ref_run_real_time_factor=float(ref.cost.sim_time) / ref_run_s
-                   if ref_run_s > 0 else math.inf)
+                   if ref_run_s > 0 else math.inf,
+                   ref_cpu_per_sim_s=float(ref.cost.cpu_s) / float(ref.cost.sim_time)
+                   if float(ref.cost.sim_time) > 0 else math.nan)
         return {"job": job, "row": row, "n_eta": len(eta_rows(res, ref)),
                 "elapsed_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
     c = compare(scene, motion, engines=job["engines"], phi0=phi0, duration=job["duration"])
@@ -476,7 +478,7 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
     for df in (metrics, eta, eta_summary, records):    # a scene by its name, not its file
         if "scene" in df:
             df["scene"] = df["scene"].map(lambda r: labels.get(r, r))
-    engines_tab = T.engine_summary(metrics, eta_summary, speed, maps["agreement"])
+    engines_tab = T.engine_summary(metrics, eta_summary, maps["agreement"])
     return CampaignTables(plan=dict(plan, labels=labels), names=names, states=states,
                           payloads=payloads, dt_payloads=dt_payloads, metrics=metrics, eta=eta,
                           eta_summary=eta_summary, engines=engines_tab, speed=speed,

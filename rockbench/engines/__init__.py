@@ -1,4 +1,13 @@
-"""Backend registry: name -> "module:Class". Adding an engine is one file and one line here.
+"""Backend registry: name -> "module:Class". Adding an engine is one adapter file (the contract:
+:mod:`rockbench.engines.base`) and either one line in :data:`REGISTRY` (an engine of this
+package) or, from outside the package, an entry point of the group :data:`ENTRY_POINT_GROUP`
+in the adapter's own distribution::
+
+    [project.entry-points."rockbench.engines"]
+    myengine = "my_package.adapter:MyBackend"
+
+Every caller (run, compare, map, tradeoff, advise, stress, fragility, the report) asks this
+registry, so a registered engine reaches all of them with no other edit.
 
 Modules are imported lazily, so a missing engine package only affects its own backend, and an
 engine is imported only when it is used: :func:`get_backend` imports the adapter module (which
@@ -15,19 +24,10 @@ from collections.abc import Iterable
 from typing import Any
 
 from ..errors import BackendUnavailable, ParameterError
+from ..registry import ENTRY_POINT_GROUP, REGISTRY, discover_engines
 
-#: The registered backends. The analytic reference comes first.
-REGISTRY: dict[str, str] = {
-    "analytic": "rockbench.engines.analytic:AnalyticBackend",
-    "pymunk": "rockbench.engines.pymunk:PymunkBackend",
-    "mujoco": "rockbench.engines.mujoco:MujocoBackend",
-    "pybullet": "rockbench.engines.pybullet:PybulletBackend",
-    "opensees": "rockbench.engines.opensees:OpenseesBackend",
-    "drake": "rockbench.engines.drake:DrakeBackend",
-}
-
-__all__ = ["REGISTRY", "REQUIRE_ENV", "get_backend", "backend_names", "available_backends",
-           "engine_info", "engine_versions", "engine_states", "required_engines",
+__all__ = ["REGISTRY", "ENTRY_POINT_GROUP", "discover_engines", "REQUIRE_ENV", "get_backend",
+           "backend_names", "available_backends", "engine_info", "engine_versions", "engine_states", "required_engines",
            "check_required", "unavailable_lines", "ENGINE_STATES"]
 
 #: Environment variable naming engines that must be available (comma-separated names, or

@@ -55,8 +55,8 @@ def choice_html(choice: Mapping[str, Any], figdir, *, with_work_precision: bool 
     if tab is not None and len(tab) and with_work_precision:
         parts.append(H.figure_html(
             plot_work_precision(tab),
-            f"Work-precision on {choice.get('scene', 'the scene')} (the quick evidence of "
-            "rockbench advise: free "
+            f"Work-precision on {choice.get('scene', 'the scene')} (the "
+            f"{choice.get('evidence', 'quick')} evidence of rockbench advise: free "
             "rocking from small and large angles, pulse cells across the A-W plane away from "
             "and near the overturning boundary, scaled records; both parts, choice and "
             "held-out): worst error against the analytic model [-] against the steady-state "
@@ -68,8 +68,9 @@ def choice_html(choice: Mapping[str, Any], figdir, *, with_work_precision: bool 
     adv = choice.get("advice")
     if adv is not None and len(adv):
         shown = advice_display(adv)
-        parts.append("<h3>The cheapest setting of each engine within each tolerance</h3>"
-                     + H.html_table(shown, list(shown.columns), graded=False))
+        parts.append("<details><summary>The advice table (advice.csv): each engine's fate and "
+                     "cheapest setting within each tolerance, with the reason</summary>"
+                     + H.html_table(shown, list(shown.columns), graded=False) + "</details>")
     st = choice.get("stress")
     br = choice.get("breaks")
     base = choice.get("stress_base") or "the base scene"

@@ -30,6 +30,12 @@ def _groups(df: pd.DataFrame, hybrid: Mapping[str, bool],
     return [(k, v) for k, v in out if len(v)]
 
 
+def _cpu(row) -> str:
+    """A speed-sweep row's cost in words (process CPU s per simulated s of the one run)."""
+    v = float(row.get("cpu_per_sim_s", float("nan")))
+    return f"{v:.3g} CPU s per simulated s" if v == v else "an unmeasured cost"
+
+
 def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summary: pd.DataFrame,
                         speed: pd.DataFrame, records: pd.DataFrame, *,
                         hybrid: Mapping[str, bool] | None = None,
@@ -128,9 +134,8 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
                 lo, hi = okk.iloc[0], okk.iloc[-1]
                 best = okk.loc[okk["nrmse"].astype(float).idxmin()]
                 lines.append(f"Time step ({b}): dt = {hi['dt']:g} s gives nrmse "
-                             f"{hi['nrmse']:.3g} at a real-time factor of "
-                             f"{hi['real_time_factor']:.3g}; dt = {lo['dt']:g} s gives "
-                             f"{lo['nrmse']:.3g} at {lo['real_time_factor']:.3g}; the smallest "
+                             f"{hi['nrmse']:.3g} at {_cpu(hi)}; dt = {lo['dt']:g} s gives "
+                             f"{lo['nrmse']:.3g} at {_cpu(lo)}; the smallest "
                              f"nrmse, {best['nrmse']:.3g}, at dt = {best['dt']:g} s.")
             for _, r in s[s["status"] == "error"].iterrows():
                 lines.append(f"{b} at dt = {r['dt']:g} s was not run: {r.get('reason') or ''}.")

@@ -111,12 +111,22 @@ def decision_sentences(advice: pd.DataFrame, scene: str, *,
     return out
 
 
-def _where_it_breaks(breaks: pd.DataFrame | None, engine: str) -> str:
+def _short_reason(reason: Any, limit: int = 48) -> str:
+    """The first clause of a reason, at most ``limit`` characters."""
+    text = str(reason or "").split(";")[0].strip()
+    return text if len(text) <= limit else text[:limit - 1].rstrip() + "…"
+
+
+def _where_it_breaks(breaks: pd.DataFrame | None, engine: str, *, first_only: bool = False
+                     ) -> str:
+    """The first value along each stability axis where ``engine`` is not within 5 %, with
+    its unit and the real reason (short): "alpha = 0.6 rad: diverged (mechanical energy
+    grew ...)"."""
     if breaks is None or not len(breaks) or "engine" not in breaks:
         return ""
     b = breaks[breaks["engine"] == engine]
     if not len(b):
-        return "nowhere tried"
+        return "holds at every point tried"
     parts = []
     for _, r in b.iterrows():
         v = r.get("value")
@@ -124,7 +134,12 @@ def _where_it_breaks(breaks: pd.DataFrame | None, engine: str) -> str:
             v = f"{float(v):g}"
         except (TypeError, ValueError):
             v = str(v)
-        parts.append(f"{r.get('axis')} {v} ({r.get('class')})")
+        name = str(r.get("axis"))
+        unit = str(r.get("unit") or "") if pd.notna(r.get("unit")) else ""
+        unit = "" if unit in ("-", "") else (" " + unit)
+        parts.append(f"{name} = {v}{unit}: {r.get('class')} ({_short_reason(r.get('reason'))})")
+    if first_only and len(parts) > 1:
+        return f"{parts[0]}; {len(parts) - 1} more axes in the stability section"
     return "; ".join(parts)
 
 
@@ -132,12 +147,12 @@ def _cell(r: Mapping[str, Any]) -> str:
     """One engine's fate at one tolerance, short: a page cell."""
     st = str(r["status"])
     if st == CONFIRMED:
-        return (f"{r['setting']}: {as_float(r['cpu_per_sim_s']):.3g} CPU s/s "
-                f"({pct(r['worst_error_choice'])} / {pct(r['worst_error_heldout'])})")
+        return (f"{r['setting']} · {as_float(r['cpu_per_sim_s']):.2g} CPU s/s · "
+                f"{pct(r['worst_error_choice'])} / {pct(r['worst_error_heldout'])}")
     if st in ABSENT:
         return st
     err = as_float(r.get("worst_error_choice"))
-    where = f" {r['setting']}" if isinstance(r.get("setting"), str) else ""
+    where = f" at {r['setting']}" if isinstance(r.get("setting"), str) else ""
     return st + (f" ({pct(err)}{where})" if math.isfinite(err) else "")
 
 
@@ -152,8 +167,9 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
     Values are display strings."""
     if advice is None or not len(advice):
         return pd.DataFrame()
+    # the engines in the order of the loosest tolerance's ranking (the first column)
     engines = list(dict.fromkeys(advice.sort_values(["tolerance", "rank"],
-                                                    ascending=[True, True])["engine"]))
+                                                    ascending=[False, True])["engine"]))
     rows = []
     for e in engines:
         row: dict[str, Any] = {"engine": e}
@@ -167,16 +183,18 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
                 w = a.iloc[a["agree_fraction"].astype(float).argmin()]
                 n, frac = int(as_float(w.get("cells", math.nan)) or 0), as_float(
                     w["agree_fraction"])
-                differ = int(round(n * (1 - frac))) if n else None
+                d = as_float(w.get("differ", math.nan))
+                differ = int(d) if math.isfinite(d) else (int(round(n * (1 - frac))) if n
+                                                          else None)
                 row["map agreement"] = (f"{differ} of {n} differ" if differ is not None
                                         else pct(frac, 1)) + f", kappa {as_float(w['kappa']):.3f}"
             else:
-                row["map agreement"] = "no map here (the maps section says why)"
+                row["map agreement"] = "no map (the maps section says why)"
         if eta_summary is not None and len(eta_summary):
             s = eta_summary[(eta_summary["backend"] == e)]["rel_error"].astype(float).abs()
             if len(s.dropna()):
                 row["free-rocking eta error (worst)"] = pct(s.max())
-        w = _where_it_breaks(breaks, e)
+        w = _where_it_breaks(breaks, e, first_only=True)
         if w:
             row["breaks first at"] = w
         rows.append(row)
@@ -222,16 +240,8 @@ def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
     collapsed under the "About" line."""
     lead = decision_sentences(advice, scene, next_steps=next_steps)
     parts = ['<div id="decision">']
-    if structure:
-        parts.append(f'<p class="lead">About: {escape(structure)}</p>')
-    if structures is not None and len(structures):
-        from .html import html_table
-
-        parts.append("<details><summary>The structures, field by field (SI units; "
-                     "docs/scenes.md)</summary>" + html_table(
-                         structures, list(structures.columns), graded=False, scroll=True)
-                     + "</details>")
-    parts.append("<ul>" + "".join(f"<li>{escape(s)}</li>" for s in lead) + "</ul>")
+    # every engine's row first (the first screen of a small laptop holds it), then the
+    # sentences, then what the cells mean
     tab = decision_table(advice, agreement=agreement, eta_summary=eta_summary, breaks=breaks,
                          scene=scene)
     if len(tab):
@@ -239,17 +249,33 @@ def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
         body = "".join("<tr>" + "".join(
             f"<td class=\"txt\">{escape('' if pd.isna(v) else str(v))}</td>" for v in r)
             + "</tr>" for r in tab.itertuples(index=False))
-        parts.append(f'<table id="decision-table"><thead><tr>{head}</tr></thead>'
-                     f"<tbody>{body}</tbody></table>")
+        parts.append(f'<table id="decision-table"><caption>Each engine on {escape(scene)}: '
+                     "the setting to use within each tolerance, its cost in CPU s per "
+                     "simulated s, and its worst error on the chosen / the held-out cases"
+                     f"</caption><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+    parts.append('<ul class="lead">' + "".join(f"<li>{escape(s)}</li>" for s in lead)
+                 + "</ul>")
+    if len(tab):
         fates = "; ".join(f"<b>{escape(k)}</b>: {escape(v)}" for k, v in FATES.items())
-        parts.append("<p><small>A cell: the setting, its cost in process CPU seconds per "
-                     "simulated second (steady state) and its worst relative error against the "
-                     "analytic model on the chosen / the held-out cases; otherwise the engine's "
-                     f"fate ({fates}) with its closest error. Map agreement: the cells whose "
+        parts.append("<details><summary>What a cell says</summary><p><small>A cell: the "
+                     "setting, its cost in process CPU seconds per simulated second (steady "
+                     "state) and its worst relative error against the analytic model on the "
+                     "chosen / the held-out cases; otherwise the engine's fate "
+                     f"({fates}) with its closest error. Map agreement: the cells whose "
                      "overturning verdict differs from the analytic map's, of those compared, "
-                     "and Cohen's kappa. Breaks: the first value along each stability axis "
-                     "where the engine is not within 5 %, with the reason (docs/choosing.md)."
-                     "</small></p>")
+                     "and Cohen's kappa. Breaks first at: the first value along a stability "
+                     "axis, with its unit, where the engine is not within 5 % (the class and "
+                     "the reason measured; every axis in the section Choosing a modelling "
+                     "approach, docs/choosing.md).</small></p></details>")
+    if structure:
+        parts.append(f'<p>About: {escape(structure)}</p>')
+    if structures is not None and len(structures):
+        from .html import html_table
+
+        parts.append("<details><summary>The structures, field by field (SI units; "
+                     "docs/scenes.md)</summary>" + html_table(
+                         structures, list(structures.columns), graded=False)
+                     + "</details>")
     for n in notes:
         parts.append(f"<p>{escape(n)}</p>")
     parts.append(work_precision_html)

@@ -46,6 +46,7 @@ __all__ = [
     "plot_history_grid",
     "plot_record_peaks",
     "plot_speed_accuracy",
+    "legend_below",
     "plot_summary_table",
     "png_bytes",
 ]
@@ -95,23 +96,34 @@ def grade(metric: str, value: Any) -> str:
 # ------------------------------------------------------------------------------------------
 # Engine colours
 # ------------------------------------------------------------------------------------------
-_ENGINE_COLORS = {"analytic": "#000000", "pymunk": "#1f77b4", "mujoco": "#ff7f0e",
-                  "pybullet": "#2ca02c"}
-_EXTRA_COLORS = ["#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22"]
+#: Colours of the backends in registry order (the analytic reference is black); a name the
+#: registry does not know gets one of the last colours by its letters.
+_PALETTE = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+            "#17becf", "#bcbd22", "#7f7f7f"]
+
+
+def _registered() -> list[str]:
+    from ..registry import REGISTRY
+
+    return list(REGISTRY)
 
 
 def engine_color(name: str) -> str:
-    """A fixed colour per backend (analytic black), so every figure uses the same one."""
-    if name in _ENGINE_COLORS:
-        return _ENGINE_COLORS[name]
-    return _EXTRA_COLORS[sum(map(ord, name)) % len(_EXTRA_COLORS)]
+    """A fixed colour per backend (analytic black, then the registry's order), so every
+    figure uses the same one."""
+    reg = _registered()
+    if name == reg[0]:
+        return "#000000"
+    if name in reg:
+        return _PALETTE[(reg.index(name) - 1) % len(_PALETTE)]
+    return _PALETTE[-1 - sum(map(ord, name)) % 3]
 
 
 def _order(names) -> list[str]:
     """Backends with the analytic reference first, then in registry order, then the rest."""
     names = list(dict.fromkeys(names))
-    known = [n for n in _ENGINE_COLORS if n in names]
-    return known + sorted(n for n in names if n not in _ENGINE_COLORS)
+    reg = _registered()
+    return [n for n in reg if n in names] + sorted(n for n in names if n not in reg)
 
 
 # ------------------------------------------------------------------------------------------
@@ -170,8 +182,44 @@ def as_trace(obj: Any) -> Trace:
 
 
 # ------------------------------------------------------------------------------------------
+# Legends: below the panels, never over the data
+# ------------------------------------------------------------------------------------------
+def legend_below(fig: Figure, *, extra: Sequence[tuple[Any, str]] = (), fontsize: float = 8,
+                 max_cols: int = 5) -> None:
+    """One legend for the whole figure, below its panels (``fig`` must use the constrained
+    layout, which makes room for it): the unique labelled artists of every axes, then
+    ``extra`` (handle, label) pairs; every axes-level legend is removed. Never over the data,
+    never wider than the figure (at most ``max_cols`` columns)."""
+    seen: dict[str, Any] = {}
+    for ax in fig.axes:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab and not lab.startswith("_"):
+                seen.setdefault(lab, h)
+        if ax.get_legend() is not None:
+            ax.get_legend().remove()
+    for h, lab in extra:
+        seen.setdefault(lab, h)
+    if not seen:
+        return
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    width = fig.get_figwidth() * fig.dpi
+    for ncol in range(min(len(seen), max_cols), 0, -1):   # as many columns as fit
+        leg = fig.legend(list(seen.values()), list(seen), loc="outside lower center",
+                         ncol=ncol, fontsize=fontsize, frameon=False)
+        if ncol == 1 or leg.get_window_extent(renderer).width <= 0.98 * width:
+            return
+        leg.remove()
+
+
+# ------------------------------------------------------------------------------------------
 # Rotation histories
 # ------------------------------------------------------------------------------------------
+_IMPACTS = (Line2D([], [], color="0.3", marker="|", linestyle="none", markersize=9),
+            "impacts (analytic |, engines x)")
+
+
 def _plot_traces(ax, traces: Mapping[str, Trace], alpha: float, *, legend: bool = True):
     for name in _order(traces):
         tr = traces[name]
@@ -187,10 +235,7 @@ def _plot_traces(ax, traces: Mapping[str, Trace], alpha: float, *, legend: bool 
     ax.set_ylabel("phi / alpha [-]")
     ax.grid(True, lw=0.3, alpha=0.5)
     if legend:
-        handles, labels = ax.get_legend_handles_labels()
-        handles.append(Line2D([], [], color="0.3", marker="|", linestyle="none", markersize=9))
-        labels.append("impacts (analytic |, engines x)")
-        ax.legend(handles, labels, fontsize=8, loc="best", ncol=2)
+        legend_below(ax.figure, extra=[_IMPACTS])
 
 
 def plot_histories(runs: Mapping[str, Any], *, alpha: float, title: str | None = None,
@@ -233,12 +278,11 @@ def plot_histories(runs: Mapping[str, Any], *, alpha: float, title: str | None =
             m = ref.t <= t_end
             err = (np.interp(ref.t[m], tr.t, tr.phi) - ref.phi[m]) / alpha
             ax2.plot(ref.t[m], err, color=engine_color(name), lw=1.0, label=name)
-        if len(traces) > 1:
-            ax2.legend(fontsize=8, loc="best")
     ax2.axhline(0.0, color="0.6", lw=0.6)
     ax2.set_ylabel("(phi - phi_ref)\n/ alpha [-]")
     ax2.set_xlabel("t [s]")
     ax2.grid(True, lw=0.3, alpha=0.5)
+    legend_below(fig, extra=[_IMPACTS])
     if title:
         fig.suptitle(title, fontsize=10)
     return fig
@@ -259,7 +303,7 @@ def plot_history_grid(panels: Sequence[tuple[str, Mapping[str, Any]]], *, alpha:
     axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
     for k, (ptitle, runs) in enumerate(panels):
         traces = {n: as_trace(v) for n, v in runs.items()}
-        _plot_traces(axes[k], traces, alpha, legend=(k == 0))
+        _plot_traces(axes[k], traces, alpha, legend=False)
         b = bands[k] if bands is not None and k < len(bands) else None
         for sgn in ((1.0, -1.0) if b is not None and all(map(math.isfinite, b)) else ()):
             axes[k].axhspan(sgn * b[0], sgn * b[1], color="0.5", alpha=0.25, lw=0, zorder=0)
@@ -267,6 +311,7 @@ def plot_history_grid(panels: Sequence[tuple[str, Mapping[str, Any]]], *, alpha:
         axes[k].set_xlabel("t [s]")
     for ax in axes[len(panels):]:
         ax.set_visible(False)
+    legend_below(fig, extra=[_IMPACTS])
     if title:
         fig.suptitle(title, fontsize=10)
     return fig
@@ -312,9 +357,7 @@ def plot_eta(eta: pd.DataFrame, *, title: str | None = None) -> Figure:
         ax.set_ylabel("eta [-]")
         ax.set_title(f"impacts after which it rocks {_DIR_LABEL[d]}", fontsize=9)
         ax.grid(True, lw=0.3, alpha=0.5)
-        if backends or math.isfinite(ref):
-            ax.legend(fontsize=7, loc="best")
-        else:
+        if not backends and not math.isfinite(ref):
             ax.text(0.5, 0.5, "no impacts", transform=ax.transAxes, ha="center")
         for k, name in enumerate(backends):
             vals = sub.loc[sub["backend"] == name, "eta"].to_numpy(float)
@@ -329,6 +372,7 @@ def plot_eta(eta: pd.DataFrame, *, title: str | None = None) -> Figure:
         axm.set_xlabel("backend")
         axm.set_xlim(-0.6, max(len(backends), 1) - 0.4)
         axm.grid(True, lw=0.3, alpha=0.5)
+    legend_below(fig)
     if title:
         fig.suptitle(title, fontsize=10)
     return fig
@@ -368,8 +412,7 @@ def plot_eta_summary(summary: pd.DataFrame, *, title: str | None = None) -> Figu
         ax.set_title(f"impacts after which it rocks {_DIR_LABEL[d]} "
                      f"(green band: +-{100 * good:g} %)", fontsize=9)
         ax.grid(True, lw=0.3, alpha=0.5)
-        if engines:
-            ax.legend(fontsize=8, loc="best")
+    legend_below(fig)
     axes[-1].set_xticks(range(len(scenes)), [wrap_at(str(x), "-", 12) for x in scenes], fontsize=8)
     axes[-1].set_xlabel("scene (free rocking)")
     if title:
@@ -440,54 +483,46 @@ def plot_summary_table(table: pd.DataFrame, columns: Sequence[str] | None = None
 # Speed against accuracy
 # ------------------------------------------------------------------------------------------
 def plot_speed_accuracy(df: pd.DataFrame, *, error: str = "nrmse",
-                        speeds: Sequence[str] = ("real_time_factor",),
-                        title: str | None = None) -> Figure:
-    """Speed against accuracy per engine: a real-time factor [-] (simulated s per wall s, x,
-    log) against an error measure (y, log), one line per engine through its time steps, each
-    point labelled with dt [s]; one panel per column of ``speeds``.
+                        cost: str = "cpu_per_sim_s", title: str | None = None) -> Figure:
+    """Speed against accuracy per engine, in the decision's own cost unit: process CPU s per
+    simulated s (x, log, left = cheaper; the ``cost`` column) against an error measure (y,
+    log), one line per engine through its time steps, each point labelled with dt [s].
 
-    ``df`` columns: backend, dt [s], the ``speeds`` columns [-] (e.g. ``real_time_factor``:
-    engine stepping only; ``run_real_time_factor``: the whole run, model building and
-    rockbench's per-step work included) and the ``error`` column (nrmse or peak_rel_error,
-    taken in absolute value). Analytic rows (error 0) are drawn as a vertical line at their
-    real-time factor.
+    ``df`` columns: backend, dt [s], ``cost`` [s/s], the ``error`` column (nrmse or
+    peak_rel_error, taken in absolute value) and optionally ``ref_`` + ``cost`` (the analytic
+    reference on the same case), drawn as a vertical line. The legend sits below the panel.
     """
-    speeds = [c for c in speeds if c in df.columns] or ["real_time_factor"]
-    fig = Figure(figsize=(6.2 * len(speeds) + 0.8, 5.0), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, len(speeds), squeeze=False, sharey=True)).ravel()
-    xlabels = {"real_time_factor": "real-time factor, engine stepping only [-]",
-               "run_real_time_factor": "real-time factor, whole run [-]"}
+    fig = Figure(figsize=(8.0, 5.2), layout="constrained")
+    ax = fig.subplots()
     label = {"nrmse": "nrmse: RMS (phi - phi_ref) / alpha [-]",
              "peak_rel_error": "|max|phi| / max|phi_ref| - 1| [-]"}.get(error, error)
-    for ax, speed in zip(axes, speeds):
-        for name in _order(df["backend"]) if len(df) else []:
-            s = df[df["backend"] == name].sort_values("dt")
-            if speed not in s:
-                continue
-            if name == "analytic":
-                for rtf in s[speed].dropna().unique()[:1]:
-                    ax.axvline(float(rtf), color="k", lw=1.5, ls=":",
-                               label=f"analytic reference ({float(rtf):.3g})")
-                continue
-            x = s[speed].to_numpy(float)
-            y = np.abs(s[error].to_numpy(float))
-            y = np.where(y > 0, y, np.nan)
-            ax.plot(x, y, marker="o", color=engine_color(name), label=name)
-            for xi, yi, dt in zip(x, y, s["dt"]):
-                if np.isfinite(xi) and np.isfinite(yi):
-                    ax.annotate(f"dt={float(dt):g} s", (xi, yi), fontsize=7,
-                                textcoords="offset points", xytext=(4, 4))
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel(xlabels.get(speed, speed) + "\n(simulated s per wall-clock s; right = "
-                      "faster)")
-        if error in _GRADES:
-            good, fair = _GRADES[error]
-            ax.axhline(good, color="#2e7d32", lw=0.8, ls="--", label=f"good <= {good:g}")
-            ax.axhline(fair, color="#ef6c00", lw=0.8, ls="--", label=f"fair <= {fair:g}")
-        ax.grid(True, which="both", lw=0.3, alpha=0.5)
-        ax.legend(fontsize=8, loc="best")
-    axes[0].set_ylabel(label + "\n(down = more accurate)")
+    for name in _order(df["backend"]) if len(df) else []:
+        s = df[df["backend"] == name].sort_values("dt")
+        if cost not in s or name == "analytic":
+            continue
+        x = s[cost].to_numpy(float)
+        y = np.abs(s[error].to_numpy(float))
+        y = np.where(y > 0, y, np.nan)
+        ax.plot(x, y, marker="o", color=engine_color(name), label=name)
+        for xi, yi, dt in zip(x, y, s["dt"]):
+            if np.isfinite(xi) and np.isfinite(yi):
+                ax.annotate(f"{float(dt):g}", (xi, yi), fontsize=7,
+                            textcoords="offset points", xytext=(4, 4))
+    ref = f"ref_{cost}"
+    if ref in df and df[ref].notna().any():
+        r = float(df[ref].dropna().median())
+        ax.axvline(r, color="k", lw=1.5, ls=":", label=f"analytic reference ({r:.3g} s/s)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("cost: process CPU s per simulated s [s/s] (left = cheaper)\n"
+                  "labels: the engine's time step dt [s]")
+    if error in _GRADES:
+        good, fair = _GRADES[error]
+        ax.axhline(good, color="#2e7d32", lw=0.8, ls="--", label=f"good <= {good:g}")
+        ax.axhline(fair, color="#ef6c00", lw=0.8, ls="--", label=f"fair <= {fair:g}")
+    ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    ax.set_ylabel(label + "\n(down = more accurate)")
+    legend_below(fig)
     if title:
         fig.suptitle(title, fontsize=10)
     return fig
@@ -554,7 +589,7 @@ def plot_record_peaks(df: pd.DataFrame, *, title: str | None = None) -> Figure:
                        color="0.3", label="polarity -1 (reversed)"),
                 Line2D([], [], marker="^", linestyle="none", color="0.3", label="overturned")]
     fig.legend(handles=handles, fontsize=7, loc="outside lower center",
-               ncol=len(handles))
+               ncol=min(len(handles), 5), frameon=False)
     axes[-1].set_xticks(range(len(records)), records, rotation=60, fontsize=7, ha="right")
     axes[-1].set_xlabel("ground-motion record")
     if title:

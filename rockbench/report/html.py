@@ -95,7 +95,9 @@ def html_table(df: pd.DataFrame, columns: Sequence[str] | None = None, *,
         unit, text = _unit(units, c)
         cls = ' class="txt"' if c in _TEXT_COLUMNS else ""
         tip = f' title="{escape(text)}"' if text else ""
-        label = escape(c) + (f"<br><small>[{escape(unit)}]</small>" if unit else "")
+        # a long column name breaks after its underscores, so the table fits the page
+        label = escape(c).replace("_", "_<wbr>") + (f"<br><small>[{escape(unit)}]</small>"
+                                                    if unit else "")
         head.append(f"<th{cls}{tip}>{label}</th>")
     rows = []
     for rec in df[cols].itertuples(index=False):

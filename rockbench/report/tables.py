@@ -55,9 +55,9 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "verdicts_agree": "-, pulse cases and map cells whose overturning verdict agrees",
         "verdicts_total": "-, pulse cases and map cells compared",
         "energy_gained": "-, pulse cases with energy gained at an impact",
-        "real_time_factor_median": "-, median real-time factor (stepping only)",
-        "run_real_time_factor_median": "-, median real-time factor of the whole run (speed "
-                                       "sweep)"},
+        "cpu_per_sim_s_median": "s/s, median over the ok pulse cases of the process CPU s per "
+                                "simulated s of one run (the decision measures cost with "
+                                "repeats: advice.csv)"},
     "speed_accuracy.csv": {
         "backend": "-", "dt": "s, time step", "output_dt": "s, output interval",
         "status": "-", "nrmse": "-", "peak_rel_error": "-", "max_abs_error_over_alpha": "-",
@@ -66,16 +66,21 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "run_real_time_factor": "-, simulated s per wall s of the whole run",
         "sim_time": "s, simulated time",
         "ref_real_time_factor": "-, the analytic reference on the same case (integration only)",
-        "ref_run_real_time_factor": "-, the analytic reference, whole run"},
+        "ref_run_real_time_factor": "-, the analytic reference, whole run",
+        "cpu_s": "s, process CPU time of the engine's whole run (numba compiling apart)",
+        "cpu_per_sim_s": "s/s, cpu_s per simulated second: the cost the decision ranks by",
+        "ref_cpu_per_sim_s": "s/s, the same for the analytic reference on the same case"},
     "map_agreement.csv": {
         "scene": "-", "backend": "-", "grid": "-, NA x NW x pulses of the engine's map",
         "cells": "-, cells compared (ok in both maps)",
         "differ": "-, of those, cells whose overturning verdict differs from the analytic one",
-        "agree_fraction": "-, (cells - differ) / cells", "kappa": "-, Cohen's kappa",
+        "agree_fraction": "-, (cells - differ) / cells",
+        "kappa": "-, Cohen's kappa of the verdicts (1: perfect, 0: chance)",
         "engine_overturns_analytic_survives": "-, cells",
         "analytic_overturns_engine_survives": "-, cells",
-        "boundary_shift_mean": "-, mean shift of the overturning boundary along A",
-        "boundary_shift_max_abs": "-, largest |shift| along A",
+        "boundary_shift_mean": "-, mean over pulses and frequencies of A_min(engine) - "
+                               "A_min(analytic) (negative: the engine overturns earlier)",
+        "boundary_shift_max_abs": "-, largest |A_min(engine) - A_min(analytic)|",
         "not_ok": "-, cells not ok in either map (left out of cells)",
         "near_boundary": "-, compared cells within 2 % in A of the analytic boundary",
         "disagree_near_boundary": "-, differing cells near the boundary",
@@ -83,6 +88,14 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "in_words": "-, the boundary's shift per pulse, in words"},
     "tradeoff.csv": {"(then)": "every column of rockbench.studies.tradeoff.TABLE_COLUMNS "
                                "(one row per engine and setting the decision's search ran)"},
+    "stress.csv": {"(then)": "every column of rockbench.studies.robustness.STRESS_COLUMNS (one "
+                             "row per engine and stability point)"},
+    "stress_breaking_points.csv": {
+        "engine": "-", "axis": "-, the stability axis (rockbench stress)",
+        "side": "-, below | above the base scene's value (all: an axis without one)",
+        "value": "the axis's unit, the first value on that side where the engine is not within "
+                 "5 %", "unit": "-, the axis's unit", "class": "-, off | diverged | invalid",
+        "reason": "-, what was measured there"},
     "advice.csv": {
         "tolerance": "-, relative error (0.02 = 2 %)", "rank": "-, 1 = recommended when it "
         "meets the tolerance", "engine": "-",
@@ -109,8 +122,7 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
                                   "overturning verdict",
         "within_band": "-, bool: the backend's peak lies in [band_low, band_high] (an overturned "
                        "run: some analytic run of the band overturns too)",
-        "band_distance": "-, signed distance of the peak to the band, in alpha (0 inside)",
-        "real_time_factor": "-"},
+        "band_distance": "-, signed distance of the peak to the band, in alpha (0 inside)"},
 }
 
 #: Columns of ``speed_accuracy.csv``, in order.
@@ -118,7 +130,8 @@ SPEED_COLUMNS = ["backend", "dt", "output_dt", "status", "reason", "nrmse", "pea
                  "max_abs_error_over_alpha", "n_impacts", "n_impacts_ref", "eta_max_rel_error",
                  "verdict_agrees", "real_time_factor", "wall_s", "steps", "run_s",
                  "run_real_time_factor", "sim_time", "engine_version",
-                 "ref_real_time_factor", "ref_run_real_time_factor"]
+                 "ref_real_time_factor", "ref_run_real_time_factor", "cpu_s", "cpu_per_sim_s",
+                 "ref_cpu_per_sim_s"]
 
 
 def _bool(v: Any) -> bool | None:
@@ -249,7 +262,7 @@ def speed_table(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
     return speed[SPEED_COLUMNS]
 
 
-def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.DataFrame,
+def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame,
                    agreement: pd.DataFrame | None = None) -> pd.DataFrame:
     """``engines.csv``: one row per backend (columns: :data:`CAMPAIGN_COLUMNS`): the pulse
     cases' errors and verdicts, and, from ``agreement`` (``map_agreement.csv``), the cells of
@@ -271,7 +284,6 @@ def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.D
             n_total += int(a["cells"].sum())
             n_agree += int(a["cells"].sum() - a["differ"].sum()) if "differ" in a else int(
                 round((a["cells"] * a["agree_fraction"]).sum()))
-        sp = speed[speed["backend"] == b] if len(speed) else speed
         versions = s["engine_version"].dropna().astype(str)
         rows.append({
             "backend": b, "engine_version": versions.iloc[0] if len(versions) else "",
@@ -283,10 +295,7 @@ def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame, speed: pd.D
             "eta_mean_rel_error": float(er.mean()) if len(er) else math.nan,
             "verdicts_agree": n_agree, "verdicts_total": n_total,
             "energy_gained": int(ok["energy_gained_at_impact"].fillna(False).astype(bool).sum()),
-            "real_time_factor_median": float(ok["real_time_factor"].astype(float).median())
-            if len(ok) else math.nan,
-            "run_real_time_factor_median": float(sp["run_real_time_factor"].astype(float)
-                                                 .median()) if len(sp) and
-            "run_real_time_factor" in sp else math.nan,
+            "cpu_per_sim_s_median": float(ok["cpu_per_sim_s"].astype(float).median())
+            if len(ok) and "cpu_per_sim_s" in ok else math.nan,
         })
     return pd.DataFrame(rows)

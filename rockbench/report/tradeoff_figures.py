@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from . import figures as F
 from .figures import engine_color
 
 __all__ = ["pareto_front", "plot_work_precision", "plot_stability_map", "CLASS_COLORS"]
@@ -118,13 +119,14 @@ def plot_work_precision(table: pd.DataFrame, *, errors: Sequence[str] = ("worst_
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.set_ylim(bottom, top * 1.5)
+            ax.margins(x=0.12)        # room for the rightmost point's label
         # short, and clear of the lowest y tick label even when no x tick is labelled (a
         # sweep within one decade): the details are in the caption
         ax.set_xlabel("cost: CPU s per simulated s [s/s] (median; bars min-max; left = "
                       "cheaper)\nlabels: dt [s], or the engine's own knob", labelpad=10)
         ax.set_ylabel(_ERROR_LABELS.get(err, err) + "\n(down = more accurate)")
         ax.grid(True, which="both", lw=0.3, alpha=0.5)
-        ax.legend(fontsize=8, loc="best")
+    F.legend_below(fig)
     if title:
         fig.suptitle(title, fontsize=10)
     return fig

@@ -18,7 +18,9 @@ with its reason. The row's ``class`` (:data:`rockbench.studies.tradeoff.VERDICTS
   the structure fell, energy gained at an impact in free rocking; ``invalid`` when the
   reference has impacts but the run measured no finite eta (e.g. a too coarse ``output_dt``);
 * ``diverged`` / ``invalid``: the run's status (or an exception: ``invalid`` with its reason);
-* ``outside model``: the point lies outside the analytic model's validity: in most engines that
+* ``outside model``: the point lies outside the analytic model's validity: its motion asks
+  the base for more friction than the contact has (:func:`rockbench.validity.motion_validity`,
+  the rule every study uses: peak ground acceleration above mu g), or, in most engines that
   ran, the impacts rebound (a contact the model keeps closed opens and the effective eta
   exceeds the analytic one by more than 20 %): stocky frames, where the rigid, sticking impact
   of the model no longer describes the physics. ``model_validity`` says which side of that
@@ -311,6 +313,8 @@ def run_point(item: tuple[str, StressPoint]) -> dict[str, Any]:
     row = _row(engine, pt)
     try:
         scene, motion, dur, phi0 = _load(pt)
+        from ..validity import motion_validity
+        row["model_validity"] = motion_validity(scene, motion).reason   # the one rule
         ref = run(scene, motion, engine="analytic", duration=dur, phi0=phi0)
         row["ref_status"] = ref.status
         c0 = time.process_time()
@@ -392,9 +396,17 @@ def _crashed(item, reason: str) -> dict[str, Any]:
 
 
 def _validity(df: pd.DataFrame) -> pd.DataFrame:
-    """Mark the points where most engines' impacts rebound as outside the model's validity."""
+    """Mark the points outside the model's validity: a motion whose peak ground acceleration
+    exceeds the base friction (:func:`rockbench.validity.motion_validity`, the one rule), or
+    where most engines' impacts rebound."""
     df = df.copy()
     for (axis, value), g in df.groupby(["axis", "value"], sort=False):
+        apriori = g["model_validity"].fillna("").astype(str)
+        apriori = apriori[apriori.str.startswith("outside")]
+        if len(apriori):       # the motion asks the base for more friction than it has
+            df.loc[g.index, "model_validity"] = apriori.iloc[0]
+            df.loc[g.index, "class"] = "outside model"
+            continue
         ok = g[g["status"] == "ok"]
         reb = ok[(ok["contact_opened"].fillna(False).astype(bool))
                  & (ok["eta_ratio_max"].astype(float) > 1 + _REBOUND)]
@@ -487,8 +499,8 @@ def stress(engines: Sequence[str] | None = None, *, full: bool = False,
 def breaking_points(table: pd.DataFrame, scene: Any = None) -> pd.DataFrame:
     """Per engine and axis, the first value, going away from the base scene (``scene``; default
     the paper's frame) on either side, whose class is off, diverged or invalid (columns engine,
-    axis, side ("below" / "above" the base value), value, class, reason); points outside the
-    model's validity are skipped."""
+    axis, side ("below" / "above" the base value), value, unit (the axis's, :func:`axis_label`),
+    class, reason); points outside the model's validity are skipped."""
     bad = ("off", "diverged", "invalid")
     values = PAPER_VALUES if scene in (None, _BASE) else base_values(scene)
     out = []
@@ -501,9 +513,12 @@ def breaking_points(table: pd.DataFrame, scene: Any = None) -> pd.DataFrame:
                           ) if math.isfinite(p) else (("all", g),):
             for _, r in sub.iterrows():
                 if r["class"] in bad:
+                    unit = axis_label(axis).partition(" [")[2].rstrip("]")
                     out.append({"engine": eng, "axis": axis, "side": side,
-                                "value": float(r["value"]), "class": r["class"],
+                                "value": float(r["value"]), "unit": unit,
+                                "class": r["class"],
                                 "reason": r["reason"] or r["flags"] or
                                 f"error {r['error']:.3g}"})
                     break
-    return pd.DataFrame(out, columns=["engine", "axis", "side", "value", "class", "reason"])
+    return pd.DataFrame(out, columns=["engine", "axis", "side", "value", "unit", "class",
+                                      "reason"])

@@ -30,6 +30,11 @@ import pytest
 _OPTION = "--rockbench-engines"
 
 
+def pytest_configure(config: Any) -> None:
+    config.addinivalue_line("markers", "rockbench_engine(name): the test runs backend NAME "
+                                       "(rockbench.testing.needs_engine)")
+
+
 def pytest_addoption(parser: Any) -> None:
     group = parser.getgroup("rockbench")
     group.addoption(_OPTION, action="store", default=None, metavar="NAMES",
@@ -70,7 +75,7 @@ def needs_engine(name: str) -> Any:
     (a no-op mark when it can; a usage error when ``ROCKBENCH_REQUIRE_ENGINES`` requires it)."""
     (param,) = engine_params(analytic=True, names=[name])
     skip = [m for m in param.marks if m.name == "skip"]
-    return skip[0] if skip else pytest.mark.usefixtures()
+    return skip[0] if skip else pytest.mark.rockbench_engine(name)
 
 
 def _engines(config: Any) -> list[Any]:
