@@ -79,7 +79,7 @@ window.addEventListener('load', function () {
   document.body.setAttribute('data-rb-dectop',
                              dec ? String(dec.getBoundingClientRect().top) : '-1');
   document.body.setAttribute('data-rb-dectext',
-                             dec ? dec.innerText.slice(0, 600).replace(/"/g, "'") : '');
+                             dec ? dec.innerText.slice(0, 4000).replace(/"/g, "'") : '');
   var dtab = document.getElementById('decision-table');
   document.body.setAttribute('data-rb-decbottom',
                              dtab ? String(dtab.getBoundingClientRect().bottom) : '-1');

@@ -18,8 +18,8 @@ import pandas as pd
 from ..comparison import DERIVED_COLUMNS, ETA_COLUMNS, METRIC_COLUMNS, with_derived
 from ..result import motion_label
 from . import figures as F
-from .html import (_dl, conclusion_html, figure_html, fmt, grade_legend, html_table,
-                   render_page, versions_html)
+from .html import (_dl, conclusion_html, figure_html, fmt, grade_legend, html_metric_table,
+                   html_table, render_page, versions_html)
 
 __all__ = ["SUMMARY_COLUMNS", "case_conclusion", "write_case_report"]
 
@@ -29,8 +29,8 @@ SUMMARY_COLUMNS: list[str] = [
     "max_abs_error_over_alpha", "t_uplift_error", "t_first_impact_error", "n_impacts",
     "n_impacts_ref", "eta_ccw_mean", "eta_ccw_ref", "eta_cw_mean", "eta_cw_ref",
     "eta_mean_rel_error", "eta_max_rel_error", "overturned", "overturned_ref", "verdict_agrees",
-    "energy_gained_at_impact", "max_penetration", "max_sliding", "contact_opened", "wall_s",
-    "steps", "real_time_factor"]
+    "energy_gained_at_impact", "max_penetration", "max_sliding", "contact_opened", "cpu_s",
+    "cpu_per_sim_s", "steps"]
 
 
 def _engine_versions(table: pd.DataFrame) -> dict[str, str]:
@@ -162,8 +162,7 @@ def write_case_report(comparison, out_dir, *, histories: bool = True,
     lines = case_conclusion(table)
     shown = with_derived(table)
     summary = (grade_legend()
-               + html_table(shown, SUMMARY_COLUMNS, units=units, table_id="summary",
-                            scroll=True)
+               + html_metric_table(shown, SUMMARY_COLUMNS, units=units, table_id="summary")
                + "<p>Every column (with its unit and definition) is in "
                  '<a href="metrics.csv">metrics.csv</a>; hover a header for its definition.</p>')
     fig_h = F.plot_histories(comparison.results, alpha=alpha, title=f"{scene.name}: {mlabel}")

@@ -27,6 +27,7 @@ from ..comparison import DERIVED_COLUMNS, TOLERANCES, with_derived  # noqa: F401
 from . import figures as F
 
 __all__ = [
+    "html_metric_table",
     "conclusion_html",
     "figure_html",
     "fmt",
@@ -90,10 +91,12 @@ def html_table(df: pd.DataFrame, columns: Sequence[str] | None = None, *,
     ``grade_as`` maps a displayed column to the metric whose thresholds grade it."""
     cols = [c for c in (columns if columns is not None else df.columns) if c in df.columns]
     grade_as = dict(grade_as or {})
+    # a column of words wraps (left-aligned); numbers stay on one line
+    text_cols = {c for c in cols if c in _TEXT_COLUMNS or _wordy(df[c])}
     head = []
     for c in cols:
         unit, text = _unit(units, c)
-        cls = ' class="txt"' if c in _TEXT_COLUMNS else ""
+        cls = ' class="txt"' if c in text_cols else ""
         tip = f' title="{escape(text)}"' if text else ""
         # a long column name breaks after its underscores, so the table fits the page
         label = escape(c).replace("_", "_<wbr>") + (f"<br><small>[{escape(unit)}]</small>"
@@ -104,7 +107,7 @@ def html_table(df: pd.DataFrame, columns: Sequence[str] | None = None, *,
         cells = []
         for c, v in zip(cols, rec):
             classes = []
-            if c in _TEXT_COLUMNS:
+            if c in text_cols:
                 classes.append("txt")
             if graded:
                 g = F.grade(grade_as.get(c, c), None if _missing(v) else v)
@@ -117,6 +120,38 @@ def html_table(df: pd.DataFrame, columns: Sequence[str] | None = None, *,
     html = (f"<table{tid}>\n<thead><tr>{''.join(head)}</tr></thead>\n<tbody>\n"
             + "\n".join(rows) + "\n</tbody>\n</table>")
     return f'<div class="scroll">{html}</div>' if scroll else html
+
+
+def html_metric_table(df: pd.DataFrame, columns: Sequence[str], *, key: str = "backend",
+                      units: Mapping[str, str] | None = None, table_id: str | None = None
+                      ) -> str:
+    """``df`` transposed: one row per column of ``columns`` (its name, unit and definition as a
+    tooltip), one column per row of ``df`` (headed by its ``key``), each cell graded as
+    :func:`html_table` grades the metric. For a few rows with many metrics (a case's
+    backends): it stays as narrow as the page."""
+    cols = [c for c in columns if c in df.columns and c != key]
+    head = "".join(f'<th class="txt">{escape(str(k))}</th>' for k in df[key])
+    rows = []
+    for c in cols:
+        unit, text = _unit(units, c)
+        tip = f' title="{escape(text)}"' if text else ""
+        label = escape(c) + (f" <small>[{escape(unit)}]</small>" if unit else "")
+        cells = []
+        for v in df[c]:
+            g = F.grade(c, None if _missing(v) else v)
+            cls = f' class="{g}"' if g != "na" else ""
+            cells.append(f"<td{cls}>{escape(fmt(v))}</td>")
+        rows.append(f'<tr><th class="txt"{tip}>{label}</th>{"".join(cells)}</tr>')
+    tid = f' id="{escape(table_id)}"' if table_id else ""
+    return (f'<table{tid}>\n<thead><tr><th class="txt">metric</th>{head}</tr></thead>\n'
+            f"<tbody>\n" + "\n".join(rows) + "\n</tbody>\n</table>")
+
+
+def _wordy(col: pd.Series) -> bool:
+    """Whether a column holds text longer than a short label (it then wraps)."""
+    if col.dtype != object and str(col.dtype) not in ("string", "str"):
+        return False
+    return any(isinstance(v, str) and len(v) > 16 for v in col)
 
 
 def _missing(v: Any) -> bool:
