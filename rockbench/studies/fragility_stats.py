@@ -9,22 +9,28 @@
 * :func:`peak_test` - Kolmogorov-Smirnov two-sample test of two peak samples, overturned runs
   right-censored (ranked above every finite peak);
 * :func:`stripes` - per scale step: counts, overturning fraction, the survivors' peaks;
+* :func:`im_efficiency` - the fit over every intensity measure of the records: the dispersion of
+  each (its efficiency: the smaller, the less record-to-record spread is left), each backend's
+  ranking of the measures, and whether an engine's best measure is the reference's;
+* :func:`numerical_dispersion`, :func:`combine_dispersions` - an engine's own error as a
+  lognormal dispersion beside the record-to-record one, beta_total = sqrt(beta_RR^2 + beta_num^2);
 * :func:`analyse` - all of the above for a frame of runs, with one verdict sentence per engine.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
-from .intensity import MEASURES
+from .intensity import BASE_MEASURE, MEASURES
 
 __all__ = ["ALPHA", "N_BOOT", "BETA_MIN", "BETA_MAX", "MIN_RECORDS", "fit_lognormal",
-           "fragility_curve", "check_bootstrap", "bootstrap", "peak_test", "stripes", "analyse"]
+           "fragility_curve", "check_bootstrap", "bootstrap", "peak_test", "stripes",
+           "im_efficiency", "numerical_dispersion", "combine_dispersions", "analyse"]
 
 #: Significance level of the tests (intervals: two-sided 1 - ALPHA); bootstrap resamples.
 ALPHA, N_BOOT = 0.05, 1000
@@ -261,6 +267,115 @@ def _holm(p: Sequence[float], alpha: float = ALPHA) -> np.ndarray:
     return reject
 
 
+# ------------------------------------------------------- intensity measures, numerical error
+def _family(measure: str) -> str:
+    """The measure a dimensionless measure is a constant multiple of (itself otherwise)."""
+    return BASE_MEASURE.get(measure, measure)
+
+
+def im_efficiency(runs: pd.DataFrame, record_ims: pd.DataFrame, *,
+                  measures: Sequence[str] | None = None, reference: str = "analytic"
+                  ) -> dict[str, Any]:
+    """The lognormal fit (:func:`fit_lognormal`) of every backend's runs over every intensity
+    measure: a run's intensity is its ``scale`` times its record's measure (``record_ims``: one
+    row per ``record``, one column per key of :data:`MEASURES`; ``measures``: which, default
+    every column of ``record_ims`` that is a measure). Runs not ``ok`` are left out.
+
+    The efficiency of a measure is its dispersion beta [-]: the spread of ln(capacity) over
+    the records that the measure leaves (the smaller, the fewer records a study needs). A
+    dimensionless measure is a constant multiple of its base measure for one structure
+    (:data:`rockbench.studies.intensity.BASE_MEASURE`): the same dispersion, so the two rank as
+    one ("family"). Returns ``measures`` (key -> name, unit, definition) and per backend:
+    ``fits`` (key -> median [unit], dispersion [-], note, rank: 1 the smallest dispersion,
+    shared within a family; None without a regular fit), ``ranking`` (the families, each
+    named by its first measure in ``measures``, smallest dispersion first), ``best`` (the
+    first family; None without a regular fit), and for the
+    backends other than ``reference``: ``same_best`` (True / False; None when either has no
+    best) and ``same_ranking`` (the whole order of the families), and ``sentence``."""
+    if measures is None:
+        measures = [k for k in MEASURES if k in record_ims.columns]
+    for k in measures:
+        if k not in MEASURES:
+            raise ParameterError("intensity", k, f"one of {', '.join(MEASURES)}")
+        if k not in record_ims.columns:
+            raise ParameterError("record_ims", f"no column {k}", "a column per measure")
+    ok = runs[runs["status"] == "ok"]
+    by_record = record_ims.set_index("record")
+    out: dict[str, Any] = {"measures": {k: dict(zip(("name", "unit", "definition"),
+                                                    MEASURES[k])) for k in measures},
+                           "reference": reference, "backends": {}}
+    for b in dict.fromkeys(runs["backend"]):
+        g = ok[ok["backend"] == b]
+        ot = g["overturned"].astype(bool).to_numpy()
+        fits: dict[str, dict[str, Any]] = {}
+        for k in measures:
+            x = g["scale"].to_numpy(float) * by_record.loc[g["record"], k].to_numpy(float)
+            f = fit_lognormal(x, ot) if len(g) else {"median": math.nan,
+                                                     "dispersion": math.nan, "note": "no run"}
+            fits[k] = {"median": f["median"], "dispersion": f["dispersion"], "note": f["note"]}
+        # a family is named by its first measure in ``measures``, its dispersion that one's
+        rep = {k: next(m for m in measures if _family(m) == _family(k)) for k in measures}
+        fam = {rep[k]: fits[rep[k]]["dispersion"] for k in measures
+               if math.isfinite(fits[rep[k]]["dispersion"])}
+        ranking = sorted(fam, key=lambda f: (fam[f], list(measures).index(f)))
+        for k in measures:
+            fits[k]["rank"] = ranking.index(rep[k]) + 1 if rep[k] in ranking else None
+        out["backends"][b] = {"fits": fits, "ranking": ranking,
+                              "best": ranking[0] if ranking else None}
+    ref = out["backends"].get(reference)
+    for b, v in out["backends"].items():
+        if b == reference:
+            continue
+        rb = ref["best"] if ref else None
+        v["same_best"] = None if rb is None or v["best"] is None else v["best"] == rb
+        v["same_ranking"] = (None if v["same_best"] is None
+                             else v["ranking"] == ref["ranking"])
+        v["sentence"] = _im_sentence(b, v, ref, reference, out["measures"])
+    return out
+
+
+def _im_sentence(engine: str, v: Mapping[str, Any], ref: Mapping[str, Any] | None,
+                 reference: str, measures: Mapping[str, Mapping[str, str]]) -> str:
+    def named(fam: str, fits) -> str:
+        return f"{measures[fam]['name']} (dispersion {_fmt(fits[fam]['dispersion'])})"
+    if v["same_best"] is None:
+        return f"{engine}: the intensity measures are not ranked (no regular fit)."
+    order = " < ".join(measures[f]["name"] for f in v["ranking"])
+    if v["same_best"]:
+        return (f"{engine}: most efficient intensity measure {named(v['best'], v['fits'])}, "
+                f"as in the {reference} model ({named(ref['best'], ref['fits'])})"
+                + ("; the same order of every measure." if v["same_ranking"] else
+                   f"; the order of the others differs (dispersion: {order})."))
+    return (f"{engine}: most efficient intensity measure {named(v['best'], v['fits'])}, NOT the "
+            f"{reference} model's ({named(ref['best'], ref['fits'])}): a study run with this "
+            f"engine would pick another intensity measure (dispersion: {order}).")
+
+
+def numerical_dispersion(peak_errors: Sequence[float]) -> float:
+    """An engine's own error as a lognormal dispersion [-]: the root mean square of
+    ln(1 + e) over its relative peak errors e = max|phi| / max|phi_ref| - 1 [-] on the evidence
+    (the maximum-likelihood dispersion of a lognormal error of median 1, a bias counted as
+    spread); inf when an error is not finite (a run that failed), NaN for no error."""
+    e = np.asarray(list(peak_errors), dtype=float)
+    if e.size == 0:
+        return math.nan
+    if not np.all(np.isfinite(e)) or np.any(e <= -1.0):
+        return math.inf
+    return float(np.sqrt(np.mean(np.log1p(e) ** 2)))
+
+
+def combine_dispersions(*betas: float) -> float:
+    """sqrt(sum beta_i^2) [-]: the dispersion of a sum of independent normal terms in ln IM (how
+    the field combines independent lognormal uncertainties, e.g. FEMA P-695 (2009) Sec. 7.3:
+    beta_total = sqrt(beta_RR^2 + beta_num^2)). NaN if any term is NaN, inf if any is inf."""
+    b = np.asarray(betas, dtype=float)
+    if np.any(np.isnan(b)):
+        return math.nan
+    if np.any(b < 0):
+        raise ParameterError("dispersion", betas, "terms >= 0")
+    return float(np.sqrt(np.sum(b * b)))
+
+
 # ------------------------------------------------------------------------- the analysis
 def _fmt(x: float) -> str:
     return f"{x:.3g}" if math.isfinite(x) else "nan"
@@ -302,7 +417,8 @@ def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], u
 
 
 def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, seed: int = 0,
-            reference: str = "analytic") -> dict[str, Any]:
+            reference: str = "analytic", record_ims: pd.DataFrame | None = None,
+            numerical: Mapping[str, float] | None = None) -> dict[str, Any]:
     """The fragility analysis of ``runs`` (:data:`RUN_COLUMNS`; ``im`` in the unit of
     ``measure``).
 
@@ -319,6 +435,14 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
     distributions differ (Holm, family-wise 5 %) and the 95 % interval of the difference of
     the fragility medians holds 0; with fewer than :data:`MIN_RECORDS` records the engine is not
     judged (``indistinguishable`` None). Runs not ``ok`` (diverged, error) are left out of both.
+
+    With ``record_ims`` (the records' measures, :func:`rockbench.studies.ensembles.record_ims`)
+    the analysis has ``measures`` (:func:`im_efficiency`) and each backend ``im_best`` (its
+    most efficient measure) and, engines, ``im_same_best``. ``numerical``: engine -> beta_num
+    [-], its own error as a dispersion (:func:`numerical_dispersion`); each backend gets
+    ``dispersion_numerical`` (0 for ``reference``, NaN when not given) and
+    ``dispersion_total`` = sqrt(dispersion^2 + dispersion_numerical^2)
+    (:func:`combine_dispersions`).
     """
     if measure not in MEASURES:
         raise ParameterError("intensity", measure, f"one of {', '.join(MEASURES)}")
@@ -333,6 +457,9 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
                                          "definition": definition},
                            "reference": reference, "n_boot": n_boot, "seed": seed,
                            "level": 1 - ALPHA, "grid": grid.tolist(), "backends": {}}
+    if record_ims is not None:
+        out["measures"] = im_efficiency(runs, record_ims, reference=reference)
+    numerical = dict(numerical or {})
     ref = ok[ok["backend"] == reference]
     from ..engines.base import EngineSettings      # below uplift_tol: not uplifted
     floor = EngineSettings.uplift_tol
@@ -349,6 +476,14 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
             "runs": int(len(g)), "not_ok": int((g["status"] != "ok").sum()),
             "overturned": int(f["n_overturned"]), "note": f["note"],
             "records": int(g["record"].nunique()), "cpu_s": float(g["cpu_s"].sum())}
+        num = 0.0 if b == reference else float(numerical.get(b, math.nan))
+        res["dispersion_numerical"] = num
+        res["dispersion_total"] = combine_dispersions(f["dispersion"], num)
+        if "measures" in out:
+            im = out["measures"]["backends"].get(b, {})
+            res["im_best"] = im.get("best")
+            if b != reference:
+                res["im_same_best"] = im.get("same_best")
         if b != reference and len(ref):
             tests = []
             mine = ok[ok["backend"] == b]
