@@ -12,6 +12,7 @@ default scenario (:data:`rockbench.scene.synthetic.DEFAULT_SCENARIO`), seed S (d
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -274,17 +275,27 @@ def record_ims(records: Sequence[Mapping[str, Any]], structure: Structure | None
     record at scale 1, in the units of :data:`MEASURES`: pga [m/s^2] and pgv [m/s], and with
     ``structure`` (:class:`rockbench.studies.intensity.Structure`) pga_norm [-], pgv_norm [-]
     and sa [m/s^2] (each record loaded once)."""
-    from ..scene.records import load_record
-
-    keys = [k for k in MEASURES if structure is not None or k in ("pga", "pgv")]
     rows = []
     for r in records:
-        rec = load_record(r["path"], dt=r.get("dt"), units=r.get("units"))
-        if not np.any(np.asarray(rec.samples) != 0.0):
-            raise ParameterError("records", r["path"], "records with a non-zero acceleration",
-                                 "every sample of this one is 0 (PGA 0): no scale of it can "
-                                 "move anything")
+        st = os.stat(r["path"])
         rows.append({"record": r["name"], "path": r["path"],
-                     **intensities(rec, structure, keys),
-                     "duration": rec.t_end - rec.t_start, "t95": strong_motion_end(rec)})
+                     **_measured(str(r["path"]), st.st_mtime_ns, st.st_size, r.get("dt"),
+                                 r.get("units"), structure)})
     return pd.DataFrame(rows)
+
+
+@functools.lru_cache(maxsize=4096)
+def _measured(path: str, mtime_ns: int, size: int, dt: float | None, units: str | None,
+              structure: Structure | None) -> dict[str, float]:
+    """The measures, duration and t95 of one record file (cached per file version: a study
+    reads its records' measures several times)."""
+    from ..scene.records import load_record
+
+    rec = load_record(path, dt=dt, units=units)
+    if not np.any(np.asarray(rec.samples) != 0.0):
+        raise ParameterError("records", path, "records with a non-zero acceleration",
+                             "every sample of this one is 0 (PGA 0): no scale of it can "
+                             "move anything")
+    keys = [k for k in MEASURES if structure is not None or k in ("pga", "pgv")]
+    return {**intensities(rec, structure, keys), "duration": rec.t_end - rec.t_start,
+            "t95": strong_motion_end(rec)}

@@ -39,6 +39,8 @@ BETA_MIN, BETA_MAX = 1e-3, 5.0
 #: Fewest records for a verdict (n records give at most C(2n - 1, n) distinct bootstrap
 #: resamples: 6435 for 8, 3 for 2; and the KS test on 2 n runs has little power below that).
 MIN_RECORDS = 8
+#: Dispersions at or below this [-] are the fit's lower bound (separation): they tie.
+_AT_BOUND = BETA_MIN * 1.01
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
@@ -99,6 +101,11 @@ def _fit_counts(x: np.ndarray, n: np.ndarray, z: np.ndarray) -> dict[str, Any]:
                        "median at their geometric mean, dispersion at its bound")
         return out
     tau_lo, tau_hi = math.log(BETA_MIN), math.log(BETA_MAX)
+    newton = _probit_newton(lx, n, z)
+    if newton is not None:
+        mu, beta = newton
+        out["median"], out["dispersion"] = math.exp(mu), beta
+        return out
 
     def nll(p: np.ndarray) -> tuple[float, np.ndarray]:
         # p = (ln theta, ln beta); BFGS (pure NumPy on 2-vectors: no threaded BLAS call,
@@ -124,6 +131,60 @@ def _fit_counts(x: np.ndarray, n: np.ndarray, z: np.ndarray) -> dict[str, Any]:
     if beta <= BETA_MIN * 1.01:
         out["note"] = "overturning separated by intensity (a step): dispersion at its bound"
     return out
+
+
+def _probit_newton(lx: np.ndarray, n: np.ndarray, z: np.ndarray, *, iterations: int = 60
+                   ) -> tuple[float, float] | None:
+    """The maximum of the same likelihood by Newton's method: with u = a + b (ln x - m) (m the
+    mean of ln x; theta = exp(m - a / b), beta = 1 / b) it is a binomial probit regression,
+    whose log-likelihood is concave in (a, b), so Newton's steps (halved until the likelihood
+    grows) reach the one maximum. Returns (ln theta, beta), or None when it does not converge
+    or beta is outside [BETA_MIN, BETA_MAX] (:func:`_fit_counts` then takes its bounded
+    optimizer). A fit costs a few dozen array operations: the bootstrap refits thousands."""
+    from scipy.special import log_ndtr
+
+    m = float(np.mean(lx))
+    c = lx - m
+    f = n - z
+
+    def loglik(a: float, b: float) -> float:
+        u = a + b * c
+        return float(np.sum(z * log_ndtr(u) + f * log_ndtr(-u)))
+
+    t0 = c[np.argmin(np.abs(z / n - 0.5))]
+    a, b = -2.0 * t0, 2.0                        # beta = 0.5 through the crossing of 1/2
+    ll = loglik(a, b)
+    for _ in range(iterations):
+        u = a + b * c
+        lp = -0.5 * u * u - _LOG_SQRT_2PI
+        l1, l2 = np.exp(lp - log_ndtr(u)), np.exp(lp - log_ndtr(-u))
+        g = z * l1 - f * l2                                  # d loglik / du
+        h = -z * l1 * (u + l1) - f * l2 * (l2 - u)           # d2 loglik / du2 (< 0)
+        ga, gb = float(np.sum(g)), float(np.sum(g * c))
+        haa, hab, hbb = float(np.sum(h)), float(np.sum(h * c)), float(np.sum(h * c * c))
+        det = haa * hbb - hab * hab
+        if not (det > 0.0 and haa < 0.0):
+            return None
+        da, db = -(hbb * ga - hab * gb) / det, -(haa * gb - hab * ga) / det
+        step = 1.0
+        while True:
+            na, nb = a + step * da, b + step * db
+            nl = loglik(na, nb)
+            if nl >= ll - 1e-12 * abs(ll) or step < 1e-6:
+                break
+            step *= 0.5
+        a, b, ll = na, nb, nl
+        if abs(step * da) < 1e-11 * (1.0 + abs(a)) and abs(step * db) < 1e-11 * (1.0 + abs(b)):
+            break
+    else:
+        return None
+    if not (math.isfinite(a) and math.isfinite(b) and 1.0 / BETA_MAX <= b <= 1.0 / BETA_MIN):
+        return None
+    beta = 1.0 / b
+    mu = m - a * beta
+    if not lx.min() - 3.0 <= mu <= lx.max() + 3.0:
+        return None
+    return mu, beta
 
 
 def fragility_curve(x: Sequence[float], median: float, dispersion: float) -> np.ndarray:
@@ -287,10 +348,12 @@ def im_efficiency(runs: pd.DataFrame, record_ims: pd.DataFrame, *,
     (:data:`rockbench.studies.intensity.BASE_MEASURE`): the same dispersion, so the two rank as
     one ("family"). Returns ``measures`` (key -> name, unit, definition) and per backend:
     ``fits`` (key -> median [unit], dispersion [-], note, rank: 1 the smallest dispersion,
-    shared within a family; None without a regular fit), ``ranking`` (the families, each
-    named by its first measure in ``measures``, smallest dispersion first), ``best`` (the
-    first family; None without a regular fit), and for the
-    backends other than ``reference``: ``same_best`` (True / False; None when either has no
+    shared within a family and by fits at the dispersion's lower bound, which the sample
+    cannot order; None without a regular fit), ``ranking`` (the families, each named by its
+    first measure in ``measures``, smallest dispersion first), ``best`` (the first family;
+    None without a regular fit) and ``best_set`` (the families tied with it), and for the
+    backends other than ``reference``: ``same_best`` (True when the two best sets share a
+    family, False when not: the engine would pick another measure; None when either has no
     best) and ``same_ranking`` (the whole order of the families), and ``sentence``."""
     if measures is None:
         measures = [k for k in MEASURES if k in record_ims.columns]
@@ -315,19 +378,24 @@ def im_efficiency(runs: pd.DataFrame, record_ims: pd.DataFrame, *,
             fits[k] = {"median": f["median"], "dispersion": f["dispersion"], "note": f["note"]}
         # a family is named by its first measure in ``measures``, its dispersion that one's
         rep = {k: next(m for m in measures if _family(m) == _family(k)) for k in measures}
-        fam = {rep[k]: fits[rep[k]]["dispersion"] for k in measures
+        # fits at the dispersion's lower bound (separated by intensity) tie: the sample
+        # cannot tell them apart
+        fam = {rep[k]: max(fits[rep[k]]["dispersion"], _AT_BOUND) for k in measures
                if math.isfinite(fits[rep[k]]["dispersion"])}
         ranking = sorted(fam, key=lambda f: (fam[f], list(measures).index(f)))
+        levels = sorted(set(fam.values()))
         for k in measures:
-            fits[k]["rank"] = ranking.index(rep[k]) + 1 if rep[k] in ranking else None
+            fits[k]["rank"] = levels.index(fam[rep[k]]) + 1 if rep[k] in fam else None
         out["backends"][b] = {"fits": fits, "ranking": ranking,
-                              "best": ranking[0] if ranking else None}
+                              "best": ranking[0] if ranking else None,
+                              "best_set": [f for f in ranking if fam[f] == fam[ranking[0]]]}
     ref = out["backends"].get(reference)
     for b, v in out["backends"].items():
         if b == reference:
             continue
         rb = ref["best"] if ref else None
-        v["same_best"] = None if rb is None or v["best"] is None else v["best"] == rb
+        v["same_best"] = (None if rb is None or v["best"] is None
+                          else bool(set(v["best_set"]) & set(ref["best_set"])))
         v["same_ranking"] = (None if v["same_best"] is None
                              else v["ranking"] == ref["ranking"])
         v["sentence"] = _im_sentence(b, v, ref, reference, out["measures"])
@@ -341,9 +409,12 @@ def _im_sentence(engine: str, v: Mapping[str, Any], ref: Mapping[str, Any] | Non
     if v["same_best"] is None:
         return f"{engine}: the intensity measures are not ranked (no regular fit)."
     order = " < ".join(measures[f]["name"] for f in v["ranking"])
+    tied = (" (fits at the dispersion's bound: the runs separate by intensity, the measures "
+            f"{', '.join(measures[f]['name'] for f in v['best_set'])} tie)"
+            if len(v["best_set"]) > 1 else "")
     if v["same_best"]:
-        return (f"{engine}: most efficient intensity measure {named(v['best'], v['fits'])}, "
-                f"as in the {reference} model ({named(ref['best'], ref['fits'])})"
+        return (f"{engine}: most efficient intensity measure {named(v['best'], v['fits'])}"
+                f"{tied}, as in the {reference} model ({named(ref['best'], ref['fits'])})"
                 + ("; the same order of every measure." if v["same_ranking"] else
                    f"; the order of the others differs (dispersion: {order})."))
     return (f"{engine}: most efficient intensity measure {named(v['best'], v['fits'])}, NOT the "
