@@ -6,11 +6,13 @@ page block is :func:`rockbench.report.fragility_figures.fragility_html`.
 
 The ladder of each frame is found, not fixed (incremental dynamic analysis "hunt, then fill",
 Vamvatsikos & Cornell 2004): the analytic model first runs a few coarse steps (``pilot``, PGA
-targets of the ensemble's median record), its fit places ``fine`` steps over the median
-+- 2 dispersions, and the engines run the ``engine_steps`` of those whose measured overturning
-fractions are nearest to evenly spaced probabilities (1/3 and 2/3 for two): the steps where
-the overturning verdicts of the records are mixed, which is where a fit and a test of the
-peaks learn the most. Every analytic run of the pilot is kept in the fit.
+targets of the ensemble's median record, extended by factors of 4 until the analytic model
+overturns in less than half of the runs at the lowest step and in more than half at the
+highest), its lognormal fit places ``fine`` steps at the quantiles (i + 1/2) / fine of the
+fitted capacity, and the engines run the ``engine_steps`` fine steps whose quantiles are
+nearest to evenly spaced probabilities (3/8 and 5/8 of 4 steps for two: nearest to 1/3 and
+2/3): where the records' verdicts are mixed, which is where a fit and a test of the peaks learn
+the most. Every analytic run of the pilot is kept in the fit.
 """
 
 from __future__ import annotations
@@ -34,30 +36,33 @@ __all__ = ["REPORT_SIZES", "fragility_section", "section_table", "measures_table
 
 
 #: Sizes of the report's fragility section. ``records``: the ensemble when the user gives none
-#: (``docs/synthetic.md``); ``pilot``: the coarse ladder, PGA targets [m/s^2] of the ensemble's
-#: median record (one frame of the paper overturns near 12 m/s^2 on the synthetic ensemble, the
-#: hybrid one near 70; the pilot is extended by factors of 4 until its runs both survive and
-#: overturn); ``fine``: steps over the analytic median +- 2 dispersions; ``engine_steps`` of
-#: them (None: every step of the ladder) on ``engine_records`` records (None: all; at least
+#: (``docs/synthetic.md``); ``pilot``: the coarse steps, PGA targets [m/s^2] of the ensemble's
+#: median record (extended by factors of 4 until they bracket the analytic median; on the
+#: synthetic ensemble one frame of the paper overturns near 12 m/s^2, the hybrid one near 70);
+#: ``fine``: steps at the quantiles of the pilot's fit; ``engine_steps`` of them (None: every
+#: step of the ladder) on ``engine_records`` records (None: all; at least
 #: :data:`rockbench.studies.fragility_stats.MIN_RECORDS` for a verdict) for ``engines``
 #: (``fast``: those with a compiled stepping loop; ``all``); bootstrap resamples; ``tail``:
 #: each run ends this long [s] after the record's strong motion (:func:`rockbench.studies.
-#: fragility.run_lengths`).
+#: fragility.run_lengths`; measured: it changes 2 of 560 analytic verdicts of the free-standing
+#: frame on the synthetic ensemble and none of the hybrid one, docs/fragility.md).
 REPORT_SIZES: dict[str, dict[str, Any]] = {
-    "quick": {"records": "synthetic:n=8", "pilot": (4.0, 16.0, 64.0), "fine": 3,
+    "quick": {"records": "synthetic:n=8", "pilot": (6.0, 24.0), "fine": 3,
               "engine_steps": 2, "engine_records": 8, "engines": "fast", "n_boot": 100,
               "tail": 10.0},
-    "default": {"records": "synthetic", "pilot": (4.0, 16.0, 64.0), "fine": 5,
+    "default": {"records": "synthetic", "pilot": (6.0, 24.0), "fine": 4,
                 "engine_steps": 2, "engine_records": 8, "engines": "fast", "n_boot": 500,
                 "tail": 10.0},
-    "full": {"records": "synthetic", "pilot": (4.0, 16.0, 64.0), "fine": 8,
+    "full": {"records": "synthetic", "pilot": (6.0, 24.0), "fine": 8,
              "engine_steps": None, "engine_records": None, "engines": "all", "n_boot": 1000,
              "tail": 10.0},
 }
 
-#: Dispersion bounds [-] of the span of the fine ladder (median x exp(+-2 beta)): a pilot fit
-#: at its bound (a step) or very wide still places the steps near the median.
+#: Dispersion bounds [-] of the fine steps' spread: a pilot fit at its bound (a step) or very
+#: wide still places the steps near the median.
 _SPAN_BETA = (0.15, 1.0)
+#: Extensions of the pilot (factors of 4) before the section gives up bracketing the median.
+_MAX_EXTENSIONS = 4
 
 
 def _fast(names: Sequence[str]) -> list[str]:
@@ -79,44 +84,48 @@ def _steps(targets: Sequence[float], median_pga: float) -> np.ndarray:
 
 
 def _ladder(scene: str, recs, median_pga: float, cfg: Mapping[str, Any], run: dict
-            ) -> tuple[np.ndarray, pd.DataFrame]:
-    """The analytic ladder of ``scene`` (pilot, extended until it has both verdicts, then the
-    fine steps) and the analytic stripes on it."""
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """(the ladder, the engines' steps) of ``scene``: the pilot (extended until it brackets
+    the analytic median), then the fine steps at the quantiles of the pilot's fit, the engines
+    at the fine steps nearest to 1/(k+1) ... k/(k+1) (module docstring)."""
+    from scipy.stats import norm
+
     from ..runner import REFERENCE
 
     targets = list(cfg["pilot"])
-    for _ in range(4):
+    for _ in range(_MAX_EXTENSIONS + 1):
         f = run_fragility(scene, recs, engines=[REFERENCE], scales=_steps(targets, median_pga),
                           n_boot=1, numerical=None, tail=cfg["tail"], **run)
-        a = f.analysis["backends"][REFERENCE]
-        if math.isfinite(a["median"]):
-            break
-        if a["overturned"] == 0:
+        p = f.stripes.set_index("scale")["p_overturn"].sort_index()
+        if p.iloc[0] > 0.5:
+            targets.insert(0, targets[0] / 4.0)
+        elif p.iloc[-1] < 0.5:
             targets.append(targets[-1] * 4.0)
         else:
-            targets.insert(0, targets[0] / 4.0)
-    beta = min(max(a["dispersion"], _SPAN_BETA[0]), _SPAN_BETA[1]) if math.isfinite(
-        a["dispersion"]) else _SPAN_BETA[1]
-    fine = (a["median"] * np.exp(2.0 * beta * np.linspace(-1.0, 1.0, cfg["fine"]))
-            if math.isfinite(a["median"]) else np.array([]))
-    ladder = np.unique(np.concatenate([_steps(targets, median_pga), _steps(fine, median_pga)]))
-    f = run_fragility(scene, recs, engines=[REFERENCE], scales=ladder, n_boot=1,
-                      numerical=None, tail=cfg["tail"], **run)
-    return ladder, f.stripes
+            break
+    a = f.analysis["backends"][REFERENCE]
+    if not math.isfinite(a["median"]):       # no bracket found: the pilot is the ladder
+        ladder = _steps(targets, median_pga)
+        return ladder, _pick(ladder, np.full(ladder.size, 0.5), cfg["engine_steps"])
+    beta = min(max(a["dispersion"], _SPAN_BETA[0]), _SPAN_BETA[1])
+    q = (np.arange(cfg["fine"]) + 0.5) / cfg["fine"]
+    fine = _steps(a["median"] * np.exp(beta * norm.ppf(q)), median_pga)
+    ladder = np.unique(np.concatenate([_steps(targets, median_pga), fine]))
+    if cfg["engine_steps"] is None:
+        return ladder, ladder
+    return ladder, _pick(fine, q[:fine.size], cfg["engine_steps"])
 
 
-def _engine_steps(ladder: np.ndarray, stripes: pd.DataFrame, k: int | None) -> np.ndarray:
-    """``k`` steps of ``ladder`` whose analytic overturning fractions are nearest to
-    1/(k+1), ..., k/(k+1) (each step once); None: the whole ladder."""
-    if k is None or k >= ladder.size:
-        return ladder
-    p = dict(zip(np.round(stripes["scale"], 6), stripes["p_overturn"]))
-    frac = np.array([p.get(round(float(s), 6), math.nan) for s in ladder])
+def _pick(steps: np.ndarray, p: np.ndarray, k: int | None) -> np.ndarray:
+    """``k`` of ``steps`` (their overturning probabilities ``p``) nearest to 1/(k+1), ...,
+    k/(k+1), each once (None or k >= their number: all)."""
+    if k is None or k >= steps.size:
+        return steps
     chosen: list[int] = []
-    for q in np.arange(1, k + 1) / (k + 1):
-        order = np.argsort(np.where(np.isfinite(frac), np.abs(frac - q), np.inf), kind="stable")
+    for target in np.arange(1, k + 1) / (k + 1):
+        order = np.argsort(np.abs(p - target), kind="stable")
         chosen.append(next(int(i) for i in order if int(i) not in chosen))
-    return np.sort(ladder[chosen])
+    return np.sort(steps[chosen])
 
 
 def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
@@ -157,9 +166,7 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
             median_pga = float(np.median(record_ims(recs)["pga"]))
             opts = dict(run, store=store)
             for label, scene in frames.items():
-                ladder, stripes = _ladder(scene, recs, median_pga, cfg, opts)
-                e_ladder = _engine_steps(ladder, stripes[stripes["backend"] == REFERENCE],
-                                         cfg["engine_steps"])
+                ladder, e_ladder = _ladder(scene, recs, median_pga, cfg, opts)
                 f = run_fragility(scene, recs, engines=[REFERENCE, *engs], scales=ladder,
                                   engine_scales=e_ladder, engine_records=cfg["engine_records"],
                                   n_boot=cfg["n_boot"], tail=cfg["tail"], numerical=numerical,
@@ -182,10 +189,11 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
             f"step (incremental dynamic analysis; the ensemble's median PGA is "
             f"{median_pga:.3g} m/s^2): the analytic model (compiled path) on every record at "
             f"every factor of its frame's ladder, found per frame from coarse steps at "
-            f"{', '.join(f'{x:g}' for x in cfg['pilot'])} m/s^2 of the median record and "
-            f"{cfg['fine']} steps over the fitted median +- 2 dispersions ({ladders}); the "
-            f"engines ({', '.join(engs) if engs else 'none'}) on {n_e} records at the steps "
-            f"where the analytic verdicts are most mixed"
+            f"{', '.join(f'{x:g}' for x in cfg['pilot'])} m/s^2 of the median record "
+            f"(times 4 until they bracket the analytic median) and {cfg['fine']} steps at "
+            f"the quantiles of their fit ({ladders}); the engines "
+            f"({', '.join(engs) if engs else 'none'}) on {n_e} records at the steps where the "
+            f"analytic verdicts are most mixed"
             + ("" if size == "full" else "; the whole ladder for every engine with "
                "rockbench report --full")
             + f". Each run ends {cfg['tail']:g} s after the record's strong motion (95 % of "

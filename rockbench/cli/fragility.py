@@ -129,11 +129,15 @@ def cmd_fragility(args: argparse.Namespace) -> int:
                          numerical="measure" if args.numerical else None)
     out = summary(frag)
     if args.export:
+        from ..errors import ParameterError
         from ..studies.fragility_export import write_fragility_exports
 
-        written = write_fragility_exports(frag.analysis, args.export, runs=frag.runs,
-                                          record_ims=frag.records)
-        out["export"] = {k: str(v) for k, v in written.items()}
+        try:
+            written = write_fragility_exports(frag.analysis, args.export, runs=frag.runs,
+                                              record_ims=frag.records)
+            out["export"] = {k: str(v) for k, v in written.items()}
+        except ParameterError as e:            # no curve to write: said, not an error
+            out["export"] = {"error": f"not written: {e}"}
     if args.json:
         print_json(out)
         return 0

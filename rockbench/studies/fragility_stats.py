@@ -105,6 +105,9 @@ def _fit_counts(x: np.ndarray, n: np.ndarray, z: np.ndarray) -> dict[str, Any]:
     if newton is not None:
         mu, beta = newton
         out["median"], out["dispersion"] = math.exp(mu), beta
+        if beta <= BETA_MIN * 1.01:
+            out["note"] = ("overturning separated by intensity (a step): dispersion at its "
+                           "bound")
         return out
 
     def nll(p: np.ndarray) -> tuple[float, np.ndarray]:
@@ -138,48 +141,71 @@ def _probit_newton(lx: np.ndarray, n: np.ndarray, z: np.ndarray, *, iterations: 
     """The maximum of the same likelihood by Newton's method: with u = a + b (ln x - m) (m the
     mean of ln x; theta = exp(m - a / b), beta = 1 / b) it is a binomial probit regression,
     whose log-likelihood is concave in (a, b), so Newton's steps (halved until the likelihood
-    grows) reach the one maximum. Returns (ln theta, beta), or None when it does not converge
-    or beta is outside [BETA_MIN, BETA_MAX] (:func:`_fit_counts` then takes its bounded
-    optimizer). A fit costs a few dozen array operations: the bootstrap refits thousands."""
+    grows) reach the one maximum. When that maximum lies outside beta in [BETA_MIN, BETA_MAX]
+    (or at infinity: runs almost separated by intensity) the bounded maximum is on one of the
+    two faces beta = BETA_MIN, beta = BETA_MAX (a concave function on a slab), found by
+    Newton's method in a alone on each. Returns (ln theta, beta), or None when a Newton
+    iteration fails (:func:`_fit_counts` then takes its bounded optimizer). A fit costs a few
+    dozen array operations: the bootstrap refits thousands."""
     from scipy.special import log_ndtr
 
     m = float(np.mean(lx))
     c = lx - m
     f = n - z
+    b_lo, b_hi = 1.0 / BETA_MAX, 1.0 / BETA_MIN
 
     def loglik(a: float, b: float) -> float:
         u = a + b * c
         return float(np.sum(z * log_ndtr(u) + f * log_ndtr(-u)))
 
-    t0 = c[np.argmin(np.abs(z / n - 0.5))]
-    a, b = -2.0 * t0, 2.0                        # beta = 0.5 through the crossing of 1/2
-    ll = loglik(a, b)
-    for _ in range(iterations):
+    def derivatives(a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
         u = a + b * c
         lp = -0.5 * u * u - _LOG_SQRT_2PI
         l1, l2 = np.exp(lp - log_ndtr(u)), np.exp(lp - log_ndtr(-u))
-        g = z * l1 - f * l2                                  # d loglik / du
-        h = -z * l1 * (u + l1) - f * l2 * (l2 - u)           # d2 loglik / du2 (< 0)
-        ga, gb = float(np.sum(g)), float(np.sum(g * c))
-        haa, hab, hbb = float(np.sum(h)), float(np.sum(h * c)), float(np.sum(h * c * c))
-        det = haa * hbb - hab * hab
-        if not (det > 0.0 and haa < 0.0):
-            return None
-        da, db = -(hbb * ga - hab * gb) / det, -(haa * gb - hab * ga) / det
-        step = 1.0
-        while True:
-            na, nb = a + step * da, b + step * db
-            nl = loglik(na, nb)
-            if nl >= ll - 1e-12 * abs(ll) or step < 1e-6:
-                break
-            step *= 0.5
-        a, b, ll = na, nb, nl
-        if abs(step * da) < 1e-11 * (1.0 + abs(a)) and abs(step * db) < 1e-11 * (1.0 + abs(b)):
-            break
-    else:
-        return None
-    if not (math.isfinite(a) and math.isfinite(b) and 1.0 / BETA_MAX <= b <= 1.0 / BETA_MIN):
-        return None
+        return (z * l1 - f * l2,                               # d loglik / du
+                -z * l1 * (u + l1) - f * l2 * (l2 - u))        # d2 loglik / du2 (< 0)
+
+    def newton(a: float, b: float, free_b: bool) -> tuple[float, float, float, bool]:
+        ll = loglik(a, b)
+        for _ in range(iterations):
+            g, h = derivatives(a, b)
+            ga, haa = float(np.sum(g)), float(np.sum(h))
+            if free_b:
+                gb, hab, hbb = float(np.sum(g * c)), float(np.sum(h * c)), float(
+                    np.sum(h * c * c))
+                det = haa * hbb - hab * hab
+                if not (det > 0.0 and haa < 0.0):
+                    return a, b, ll, False
+                da, db = -(hbb * ga - hab * gb) / det, -(haa * gb - hab * ga) / det
+            else:
+                if not haa < 0.0:
+                    return a, b, ll, False
+                da, db = -ga / haa, 0.0
+            step = 1.0
+            while True:
+                na, nb = a + step * da, b + step * db
+                nl = loglik(na, nb)
+                if nl >= ll - 1e-12 * abs(ll) or step < 1e-6:
+                    break
+                step *= 0.5
+            a, b, ll = na, nb, nl
+            if not (math.isfinite(a) and math.isfinite(b)):
+                return a, b, ll, False
+            if abs(step * da) < 1e-11 * (1.0 + abs(a)) and \
+                    abs(step * db) < 1e-11 * (1.0 + abs(b)):
+                return a, b, ll, True
+        return a, b, ll, False
+
+    t0 = c[np.argmin(np.abs(z / n - 0.5))]
+    a, b, _, done = newton(-2.0 * t0, 2.0, True)   # from beta = 0.5 through the crossing of 1/2
+    if not (done and b_lo <= b <= b_hi):
+        faces = []
+        for bb in (b_lo, b_hi):
+            fa, fb, fl, ok = newton(-bb * t0, bb, False)
+            if not ok:
+                return None
+            faces.append((fl, fa, fb))
+        _, a, b = max(faces)
     beta = 1.0 / b
     mu = m - a * beta
     if not lx.min() - 3.0 <= mu <= lx.max() + 3.0:
