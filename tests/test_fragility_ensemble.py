@@ -110,6 +110,7 @@ def test_the_section_judges_every_engine_it_runs(cache, tmp_path, monkeypatch):
     _planted_run_cases({"paper-asymmetric": 12.0, "paper-asymmetric-hybrid-eps1": 300.0},
                        monkeypatch)
     monkeypatch.setitem(CF.REPORT_SIZES["default"], "records", "synthetic")
+    monkeypatch.setitem(CF.REPORT_SIZES["default"], "n_boot", 50)     # the plumbing, not bands
     store = tmp_path / "store"
     (store / "records").mkdir(parents=True)
     for p in cache.iterdir():                   # the module's records, not written again

@@ -146,3 +146,65 @@ def test_run_lengths_cut_after_the_strong_motion():
     assert run_lengths(ims, 10.0) == {"a": 35.0, "b": 15.0, "c": None}   # c: 50 = 40 + 10
     with pytest.raises(ParameterError, match="tail"):
         run_lengths(ims, -1.0)
+
+
+def test_the_newton_fit_is_the_bounded_optimizer_s_maximum():
+    """The fast fit (Newton's method on the probit form) against the plain one it replaces
+    (BFGS on ln theta, ln beta): on 120 random binomial data sets its log-likelihood is never
+    lower, and where the maximum is inside the bounds the two agree to 1e-5."""
+    import rockbench.studies.fragility_stats as FS
+    from scipy.special import log_ndtr
+
+    def loglik(x, n, z, f):
+        u = np.log(x / f["median"]) / f["dispersion"]
+        return float(np.sum(z * log_ndtr(u) + (n - z) * log_ndtr(-u)))
+
+    rng = np.random.default_rng(7)
+    compared = 0
+    for _ in range(120):
+        k = int(rng.integers(4, 30))
+        x = np.sort(np.exp(rng.normal(1.0, 1.0, k)))
+        n = rng.integers(1, 5, k).astype(float)
+        theta, beta = math.exp(rng.normal(1.0, 0.5)), math.exp(rng.normal(-1.0, 0.7))
+        z = rng.binomial(n.astype(int), norm.cdf(np.log(x / theta) / beta)).astype(float)
+        fast = FS._fit_counts(x, n, z)
+        real = FS._probit_newton
+        FS._probit_newton = lambda *a, **kw: None
+        try:
+            plain = FS._fit_counts(x, n, z)
+        finally:
+            FS._probit_newton = real
+        if not math.isfinite(fast["median"]):
+            assert not math.isfinite(plain["median"])
+            continue
+        assert loglik(x, n, z, fast) >= loglik(x, n, z, plain) - 1e-9
+        if 0.01 < plain["dispersion"] < 4.0 and 0.01 < fast["dispersion"]:
+            compared += 1
+            assert fast["median"] == pytest.approx(plain["median"], rel=1e-5)
+            assert fast["dispersion"] == pytest.approx(plain["dispersion"], rel=1e-4)
+    assert compared > 60
+
+
+def test_runs_outside_the_model_are_counted_and_said():
+    """A run whose scaled PGA is above mu g is outside the analytic model: counted per backend
+    and said in a sentence with the limit [m/s^2]; an engine whose records lost their runs is
+    'not judged' in words that say so."""
+    from rockbench.studies.fragility import _validity
+
+    ims = _records()
+    caps = _capacities(ims, "pga", 0.3, 6.0)
+    runs = pd.concat([_runs(ims, caps, "pga", b) for b in ("analytic", "engine")])
+    runs["outside"] = runs["im"] > 9.81
+    v = _validity(runs, 9.81, 1.0)
+    n_out = int((runs[runs["backend"] == "analytic"]["im"] > 9.81).sum())
+    assert 0 < n_out < len(runs) / 2
+    assert v["backends"]["analytic"]["outside"] == n_out
+    assert f"analytic {n_out} of" in v["text"] and "9.81 m/s^2" in v["text"]
+    # five of the engine's records lose every run: 7 left of 12, not judged, and said why
+    lost = runs["record"].isin(ims["record"][:5]) & (runs["backend"] == "engine")
+    runs.loc[lost, "status"] = "diverged"
+    a = analyse(runs, n_boot=20)
+    e = a["backends"]["engine"]
+    assert e["outside_model"] == int(runs[runs["backend"] == "engine"]["outside"].sum())
+    assert e["indistinguishable"] is None
+    assert "7 record(s) with runs that finished ok (of 12 run" in e["verdict"]

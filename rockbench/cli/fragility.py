@@ -84,7 +84,7 @@ def summary(frag) -> dict[str, Any]:
     intensity-measure table; ``numerical``: how each engine's beta_num was measured."""
     a = frag.analysis
     keep = ("median", "median_ci", "dispersion", "dispersion_ci", "dispersion_numerical",
-            "dispersion_total", "im_best", "im_same_best", "runs", "not_ok",
+            "dispersion_total", "im_best", "im_same_best", "runs", "not_ok", "outside_model",
             "overturned", "records", "note", "n_valid_resamples", "cpu_s", "statistic",
             "p_value", "median_difference", "median_difference_ci", "indistinguishable",
             "verdict", "tests")
@@ -96,7 +96,8 @@ def summary(frag) -> dict[str, Any]:
             "n_boot": a["n_boot"], "seed": a["seed"], "store": frag.store,
             "backends": {b: {k: v[k] for k in keep if k in v}
                          for b, v in a["backends"].items()},
-            "measures": a.get("measures"), "numerical": a.get("numerical", {})}
+            "measures": a.get("measures"), "numerical": a.get("numerical", {}),
+            "validity": a.get("validity")}
 
 
 def _interval(ci) -> str:
@@ -158,6 +159,8 @@ def cmd_fragility(args: argparse.Namespace) -> int:
         if "verdict" in v:
             print(v["verdict"])
     print(f"ensemble: {frag.analysis['ensemble']['text']}")
+    if (out.get("validity") or {}).get("text"):
+        print(out["validity"]["text"])
     print("dispersion: record-to-record beta_RR, the engine's own beta_num (its error on the "
           "scene's pulses at this setting), beta_total = sqrt(beta_RR^2 + beta_num^2) [-]")
     for b, v in out["backends"].items():

@@ -53,6 +53,8 @@ RUN_COLUMNS: dict[str, str] = {
     "peak": "-, max |phi| / alpha, alpha of the taller column (overturned: where it stopped)",
     "overturned": "-, the frame overturned",
     "status": "-, ok | diverged | invalid | error",
+    "outside": "-, the scaled record's PGA exceeds mu g: outside the analytic model (a base at "
+               "rest slides, rockbench.validity)",
     "cpu_s": "s, CPU time of the integration or stepping",
 }
 
@@ -175,6 +177,23 @@ def numerical_terms(evidence: pd.DataFrame) -> dict[str, dict[str, Any]]:
     return out
 
 
+def _validity(runs: pd.DataFrame, limit: float, mu: float) -> dict[str, Any]:
+    """How many runs lie outside the analytic model (PGA above mu g), per backend, with a
+    sentence: such runs are physics of another kind (the base slides), counted in the fits and
+    tests like the others (leaving them out would cut the ladder where the frame overturns)."""
+    per = {str(b): {"outside": int(g["outside"].sum()), "runs": int(len(g))}
+           for b, g in runs.groupby("backend", sort=False)}
+    n_out = sum(v["outside"] for v in per.values())
+    text = "" if n_out == 0 else (
+        "Outside the analytic model: " + ", ".join(
+            f"{b} {v['outside']} of {v['runs']} runs" for b, v in per.items())
+        + f" have a PGA above mu g = {limit:.3g} m/s^2 (friction mu = {mu:g}), where a base at "
+          "rest slides (rockbench.validity); they are counted in the fits and tests like the "
+          "others, and an engine's run that slid beyond its max_sliding is not ok and left out.")
+    return {"pga_limit": limit, "friction": mu, "backends": per, "outside": n_out,
+            "text": text}
+
+
 @dataclass
 class Fragility:
     """What :func:`run_fragility` returns: ``runs`` (:data:`RUN_COLUMNS`), ``analysis``
@@ -195,8 +214,11 @@ class Fragility:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-def _runs_frame(rows: pd.DataFrame, ims: pd.DataFrame, measure: str) -> pd.DataFrame:
-    """Sweep rows -> the runs frame (:data:`RUN_COLUMNS`)."""
+def _runs_frame(rows: pd.DataFrame, ims: pd.DataFrame, measure: str,
+                pga_limit: float = math.inf) -> pd.DataFrame:
+    """Sweep rows -> the runs frame (:data:`RUN_COLUMNS`); ``pga_limit`` [m/s^2]: the largest
+    PGA inside the analytic model (:func:`rockbench.validity.pga_limit`)."""
+    pga_of = dict(zip(ims["path"], ims["pga"]))
     im_of = dict(zip(ims["path"], ims[measure]))
     name_of = dict(zip(ims["path"], ims["record"]))
     scale = rows["motion.scale"].astype(float).to_numpy()
@@ -209,6 +231,8 @@ def _runs_frame(rows: pd.DataFrame, ims: pd.DataFrame, measure: str) -> pd.DataF
         "peak": rows["max_abs_phi_over_alpha"].astype(float).to_numpy(),
         "overturned": rows["overturned"].fillna(False).astype(bool).to_numpy(),
         "status": rows["status"].astype(str).to_numpy(),
+        "outside": np.abs(scale) * np.array([pga_of[p] for p in rows["motion.path"]])
+        > pga_limit,
         "cpu_s": rows.get("cpu_s", pd.Series(math.nan, index=rows.index)).astype(float)})
     return out
 
@@ -257,7 +281,10 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     ladder = parse_scales(scales)
     names = resolve_engines(engines, name="engine")
     names = [REFERENCE] + [n for n in names if n != REFERENCE]
-    structure = Structure.of(load_scene(scene, dict(overrides) if overrides else None))
+    from ..validity import friction_of, pga_limit
+
+    sc = load_scene(scene, dict(overrides) if overrides else None)
+    structure = Structure.of(sc)
     directory = None
     if store is not None:
         directory = S.store_dir(store)
@@ -276,12 +303,14 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     executor = executor or ("dask" if scheduler else "process")
     rows = run_cases(cases, store=directory, executor=executor, workers=workers,
                      dask_address=scheduler, progress=progress, retry_errors=retry_errors)
-    runs = _runs_frame(rows, ims, measure)
+    runs = _runs_frame(rows, ims, measure, pga_limit(sc))
     num_info: dict[str, Any] = {}
-    if numerical == "measure":
+    if numerical == "measure" and len(names) > 1:
         num_info = numerical_terms(numerical_evidence(
             scene, names[1:], settings=settings, overrides=overrides, store=store))
         betas = {e: v["beta"] for e, v in num_info.items()}
+    elif numerical == "measure":
+        betas = {}
     else:
         betas = {e: float(v) for e, v in (numerical or {}).items()}
         num_info = {e: {"beta": b, "source": "given"} for e, b in betas.items()}
@@ -305,6 +334,7 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
                              "sa_period": structure.period}
     analysis["tail"] = tail
     analysis["numerical"] = num_info
+    analysis["validity"] = _validity(runs, pga_limit(sc), friction_of(sc))
     return Fragility(scene=str(scene), runs=runs, analysis=analysis, stripes=stripes(runs),
                      records=ims, scales=ladder.tolist(),
                      store=str(directory) if directory is not None else None,

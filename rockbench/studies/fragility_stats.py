@@ -479,14 +479,18 @@ def _fmt(x: float) -> str:
 
 
 def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], unit: str,
-             name: str, reference: str, n_records: int) -> tuple[bool | None, str]:
+             name: str, reference: str, n_records: int,
+             ran_records: int | None = None) -> tuple[bool | None, str]:
     """(indistinguishable, sentence) of one engine (rules: :func:`analyse`)."""
     tested = [t for t in tests if math.isfinite(t["p_value"])]
     if not tested:
         return None, f"{engine}: no intensity where both ran: not judged."
     pmin = min(t["p_value"] for t in tested)
     if n_records < MIN_RECORDS:
-        return None, (f"{engine}: not judged: {n_records} record(s), fewer than {MIN_RECORDS} "
+        ran = (f" with runs that finished ok (of {ran_records} run; the others' runs diverged "
+               "or failed)" if ran_records is not None and ran_records > n_records else "")
+        return None, (f"{engine}: not judged: {n_records} record(s){ran}, fewer than "
+                      f"{MIN_RECORDS} "
                       f"(peak distributions at {len(tested)} intensities, smallest p = "
                       f"{_fmt(pmin)}; fragility median difference {_fmt(diff)} {unit}).")
     where = [t for t in tested if t["rejected"]]
@@ -573,6 +577,8 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
             "runs": int(len(g)), "not_ok": int((g["status"] != "ok").sum()),
             "overturned": int(f["n_overturned"]), "note": f["note"],
             "records": int(g["record"].nunique()), "cpu_s": float(g["cpu_s"].sum())}
+        if "outside" in g:
+            res["outside_model"] = int(g["outside"].astype(bool).sum())
         num = 0.0 if b == reference else float(numerical.get(b, math.nan))
         res["dispersion_numerical"] = num
         res["dispersion_total"] = combine_dispersions(f["dispersion"], num)
@@ -598,7 +604,7 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
             diff = res["median"] - fits.get(reference, {}).get("median", math.nan)
             ci = bt.get("median_difference_ci", [math.nan, math.nan])
             same, text = _verdict(b, tests, diff, ci, unit, name, reference,
-                                  int(mine["record"].nunique()))
+                                  int(mine["record"].nunique()), int(g["record"].nunique()))
             res.update(tests=tests, statistic=worst["statistic"] if worst else math.nan,
                        p_value=worst["p_value"] if worst else math.nan,
                        median_difference=diff, median_difference_ci=ci,
