@@ -15,6 +15,7 @@ import hashlib
 import json
 import math
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -36,7 +37,7 @@ def test_the_synthetic_ensemble_resolves_to_20_distinct_records(cache, monkeypat
     recs = resolve_records("synthetic", cache=cache)
     assert len(recs) == 20
     assert len({r["name"] for r in recs}) == len({r["path"] for r in recs}) == 20
-    digests = {hashlib.sha256(open(r["path"], "rb").read()).hexdigest() for r in recs}
+    digests = {hashlib.sha256(Path(r["path"]).read_bytes()).hexdigest() for r in recs}
     assert len(digests) == 20                                     # 20 different motions
     assert all(r["dt"] == 0.01 for r in recs)
     ens = describe_ensemble(recs)
@@ -50,10 +51,10 @@ def test_the_synthetic_ensemble_resolves_to_20_distinct_records(cache, monkeypat
     monkeypatch.undo()
     # record i does not depend on n; another seed gives other records
     three = resolve_records("synthetic:n=3", cache=cache)
-    assert [open(r["path"]).read() for r in three] == [open(r["path"]).read()
-                                                        for r in recs[:3]]
+    assert [Path(r["path"]).read_text() for r in three] == [Path(r["path"]).read_text()
+                                                             for r in recs[:3]]
     other = resolve_records("synthetic:n=2,seed=5", cache=cache)
-    assert open(other[0]["path"]).read() != open(recs[0]["path"]).read()
+    assert Path(other[0]["path"]).read_text() != Path(recs[0]["path"]).read_text()
     assert parse_synthetic("synthetic").name == "synthetic"
     assert parse_synthetic("synthetic:seed=5,n=2").name == "synthetic:n=2,seed=5"
     assert parse_synthetic("bundled") is None

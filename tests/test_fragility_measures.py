@@ -13,8 +13,9 @@ from scipy.stats import norm
 
 from rockbench.errors import ParameterError
 from rockbench.studies.fragility import numerical_terms, run_lengths
+from rockbench.studies.fragility_measures import im_efficiency
 from rockbench.studies.fragility_stats import (analyse, combine_dispersions, fit_lognormal,
-                                               im_efficiency, numerical_dispersion)
+                                               numerical_dispersion)
 
 G_TAN = 9.81 * math.tan(0.15)        # the planted structure's g tan alpha [m/s^2]
 P = 1.5                              # its p [rad/s]

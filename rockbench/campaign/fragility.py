@@ -183,8 +183,8 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
     st = out_frames[0]["analysis"]["structure"] if out_frames else {}
     ladders = "; ".join(
         f"{fr['label']}: {len(fr['scales'])} factors {fr['scales'][0]:.3g} to "
-        f"{fr['scales'][-1]:.3g}, the engines at {', '.join(f'{s:.3g}' for s in fr['engine_scales'])}"
-        for fr in out_frames)
+        f"{fr['scales'][-1]:.3g}, the engines at "
+        + ", ".join(f"{s:.3g}" for s in fr["engine_scales"]) for fr in out_frames)
     what = (f"Ensemble: {ens['text']}. Every record, as recorded and reversed, scaled step by "
             f"step (incremental dynamic analysis; the ensemble's median PGA is "
             f"{median_pga:.3g} m/s^2): the analytic model (compiled path) on every record at "
@@ -223,7 +223,8 @@ def section_table(section: Mapping[str, Any]) -> pd.DataFrame:
     runs, overturned, smallest p and the median difference with its interval (the analytic
     model's whole-ladder fit as backend ``analytic (whole ladder)``)."""
     rows = []
-    ens = (section.get("ensemble") or {})
+    ens = section.get("ensemble") or {}
+    kind = f"{ens.get('kind', '')}: {ens.get('name', '') or ', '.join(ens.get('folders', []))}"
     for fr in section.get("frames", []):
         a = fr["analysis"]
         items = list(a["backends"].items())
@@ -231,7 +232,7 @@ def section_table(section: Mapping[str, Any]) -> pd.DataFrame:
             items.append((f"{a['reference']} (whole ladder)", a["reference_full"]))
         for b, v in items:
             rows.append({"frame": fr["label"], "scene": fr["scene"], "backend": b,
-                         "ensemble": f"{ens.get('kind', '')}: {ens.get('name', '') or ', '.join(ens.get('folders', []))}",
+                         "ensemble": kind,
                          "intensity": a["intensity"]["name"], "unit": a["intensity"]["unit"],
                          "median": v["median"], "median_low": v["median_ci"][0],
                          "median_high": v["median_ci"][1], "dispersion": v["dispersion"],

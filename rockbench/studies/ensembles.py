@@ -253,9 +253,9 @@ def describe_ensemble(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     first = kinds[0] if kinds else {"kind": "real"}
     if kinds and all(k == first for k in kinds) and first["kind"] == "synthetic":
         out = dict(first, n=n)
-        out["text"] = (f"synthetic ensemble {out['name']!r}: {n} ground motions of the {out['model']}, "
-                       f"scenario {out['scenario']}, seed {out['seed']}, dt {out['dt']:g} s "
-                       "(docs/synthetic.md)")
+        out["text"] = (f"synthetic ensemble {out['name']!r}: {n} ground motions of the "
+                       f"{out['model']}, scenario {out['scenario']}, seed {out['seed']}, "
+                       f"dt {out['dt']:g} s (docs/synthetic.md)")
         return out
     if kinds and all(k == first for k in kinds) and first["kind"] == "bundled":
         return dict(first, n=n, text=f"recorded: {n} records of the bundled ensemble "

@@ -9,12 +9,11 @@
 * :func:`peak_test` - Kolmogorov-Smirnov two-sample test of two peak samples, overturned runs
   right-censored (ranked above every finite peak);
 * :func:`stripes` - per scale step: counts, overturning fraction, the survivors' peaks;
-* :func:`im_efficiency` - the fit over every intensity measure of the records: the dispersion of
-  each (its efficiency: the smaller, the less record-to-record spread is left), each backend's
-  ranking of the measures, and whether an engine's best measure is the reference's;
 * :func:`numerical_dispersion`, :func:`combine_dispersions` - an engine's own error as a
   lognormal dispersion beside the record-to-record one, beta_total = sqrt(beta_RR^2 + beta_num^2);
-* :func:`analyse` - all of the above for a frame of runs, with one verdict sentence per engine.
+* :func:`analyse` - all of the above for a frame of runs, with one verdict sentence per engine,
+  and the efficiency table of the intensity measures
+  (:func:`rockbench.studies.fragility_measures.im_efficiency`).
 """
 
 from __future__ import annotations
@@ -26,11 +25,11 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
-from .intensity import BASE_MEASURE, MEASURES
+from .intensity import MEASURES
 
-__all__ = ["ALPHA", "N_BOOT", "BETA_MIN", "BETA_MAX", "MIN_RECORDS", "fit_lognormal",
-           "fragility_curve", "check_bootstrap", "bootstrap", "peak_test", "stripes",
-           "im_efficiency", "numerical_dispersion", "combine_dispersions", "analyse"]
+__all__ = ["ALPHA", "N_BOOT", "BETA_MIN", "BETA_MAX", "MIN_RECORDS", "AT_BOUND",
+           "fit_lognormal", "fragility_curve", "check_bootstrap", "bootstrap", "peak_test",
+           "stripes", "numerical_dispersion", "combine_dispersions", "analyse"]
 
 #: Significance level of the tests (intervals: two-sided 1 - ALPHA); bootstrap resamples.
 ALPHA, N_BOOT = 0.05, 1000
@@ -40,7 +39,7 @@ BETA_MIN, BETA_MAX = 1e-3, 5.0
 #: resamples: 6435 for 8, 3 for 2; and the KS test on 2 n runs has little power below that).
 MIN_RECORDS = 8
 #: Dispersions at or below this [-] are the fit's lower bound (separation): they tie.
-_AT_BOUND = BETA_MIN * 1.01
+AT_BOUND = BETA_MIN * 1.01
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
@@ -354,100 +353,7 @@ def _holm(p: Sequence[float], alpha: float = ALPHA) -> np.ndarray:
     return reject
 
 
-# ------------------------------------------------------- intensity measures, numerical error
-def _family(measure: str) -> str:
-    """The measure a dimensionless measure is a constant multiple of (itself otherwise)."""
-    return BASE_MEASURE.get(measure, measure)
-
-
-def im_efficiency(runs: pd.DataFrame, record_ims: pd.DataFrame, *,
-                  measures: Sequence[str] | None = None, reference: str = "analytic"
-                  ) -> dict[str, Any]:
-    """The lognormal fit (:func:`fit_lognormal`) of every backend's runs over every intensity
-    measure: a run's intensity is its ``scale`` times its record's measure (``record_ims``: one
-    row per ``record``, one column per key of :data:`MEASURES`; ``measures``: which, default
-    every column of ``record_ims`` that is a measure). Runs not ``ok`` are left out.
-
-    The efficiency of a measure is its dispersion beta [-]: the spread of ln(capacity) over
-    the records that the measure leaves (the smaller, the fewer records a study needs). A
-    dimensionless measure is a constant multiple of its base measure for one structure
-    (:data:`rockbench.studies.intensity.BASE_MEASURE`): the same dispersion, so the two rank as
-    one ("family"). Returns ``measures`` (key -> name, unit, definition) and per backend:
-    ``fits`` (key -> median [unit], dispersion [-], note, rank: 1 the smallest dispersion,
-    shared within a family and by fits at the dispersion's lower bound, which the sample
-    cannot order; None without a regular fit), ``ranking`` (the families, each named by its
-    first measure in ``measures``, smallest dispersion first), ``best`` (the first family;
-    None without a regular fit) and ``best_set`` (the families tied with it), and for the
-    backends other than ``reference``: ``same_best`` (True when the two best sets share a
-    family, False when not: the engine would pick another measure; None when either has no
-    best) and ``same_ranking`` (the whole order of the families), and ``sentence``."""
-    if measures is None:
-        measures = [k for k in MEASURES if k in record_ims.columns]
-    for k in measures:
-        if k not in MEASURES:
-            raise ParameterError("intensity", k, f"one of {', '.join(MEASURES)}")
-        if k not in record_ims.columns:
-            raise ParameterError("record_ims", f"no column {k}", "a column per measure")
-    ok = runs[runs["status"] == "ok"]
-    by_record = record_ims.set_index("record")
-    out: dict[str, Any] = {"measures": {k: dict(zip(("name", "unit", "definition"),
-                                                    MEASURES[k])) for k in measures},
-                           "reference": reference, "backends": {}}
-    for b in dict.fromkeys(runs["backend"]):
-        g = ok[ok["backend"] == b]
-        ot = g["overturned"].astype(bool).to_numpy()
-        fits: dict[str, dict[str, Any]] = {}
-        for k in measures:
-            x = g["scale"].to_numpy(float) * by_record.loc[g["record"], k].to_numpy(float)
-            f = fit_lognormal(x, ot) if len(g) else {"median": math.nan,
-                                                     "dispersion": math.nan, "note": "no run"}
-            fits[k] = {"median": f["median"], "dispersion": f["dispersion"], "note": f["note"]}
-        # a family is named by its first measure in ``measures``, its dispersion that one's
-        rep = {k: next(m for m in measures if _family(m) == _family(k)) for k in measures}
-        # fits at the dispersion's lower bound (separated by intensity) tie: the sample
-        # cannot tell them apart
-        fam = {rep[k]: max(fits[rep[k]]["dispersion"], _AT_BOUND) for k in measures
-               if math.isfinite(fits[rep[k]]["dispersion"])}
-        ranking = sorted(fam, key=lambda f: (fam[f], list(measures).index(f)))
-        levels = sorted(set(fam.values()))
-        for k in measures:
-            fits[k]["rank"] = levels.index(fam[rep[k]]) + 1 if rep[k] in fam else None
-        out["backends"][b] = {"fits": fits, "ranking": ranking,
-                              "best": ranking[0] if ranking else None,
-                              "best_set": [f for f in ranking if fam[f] == fam[ranking[0]]]}
-    ref = out["backends"].get(reference)
-    for b, v in out["backends"].items():
-        if b == reference:
-            continue
-        rb = ref["best"] if ref else None
-        v["same_best"] = (None if rb is None or v["best"] is None
-                          else bool(set(v["best_set"]) & set(ref["best_set"])))
-        v["same_ranking"] = (None if v["same_best"] is None
-                             else v["ranking"] == ref["ranking"])
-        v["sentence"] = _im_sentence(b, v, ref, reference, out["measures"])
-    return out
-
-
-def _im_sentence(engine: str, v: Mapping[str, Any], ref: Mapping[str, Any] | None,
-                 reference: str, measures: Mapping[str, Mapping[str, str]]) -> str:
-    def named(fam: str, fits) -> str:
-        return f"{measures[fam]['name']} (dispersion {_fmt(fits[fam]['dispersion'])})"
-    if v["same_best"] is None:
-        return f"{engine}: the intensity measures are not ranked (no regular fit)."
-    order = " < ".join(measures[f]["name"] for f in v["ranking"])
-    tied = (" (fits at the dispersion's bound: the runs separate by intensity, the measures "
-            f"{', '.join(measures[f]['name'] for f in v['best_set'])} tie)"
-            if len(v["best_set"]) > 1 else "")
-    if v["same_best"]:
-        return (f"{engine}: most efficient intensity measure {named(v['best'], v['fits'])}"
-                f"{tied}, as in the {reference} model ({named(ref['best'], ref['fits'])})"
-                + ("; the same order of every measure." if v["same_ranking"] else
-                   f"; the order of the others differs (dispersion: {order})."))
-    return (f"{engine}: most efficient intensity measure {named(v['best'], v['fits'])}, NOT the "
-            f"{reference} model's ({named(ref['best'], ref['fits'])}): a study run with this "
-            f"engine would pick another intensity measure (dispersion: {order}).")
-
-
+# ------------------------------------------------------------------- numerical error
 def numerical_dispersion(peak_errors: Sequence[float]) -> float:
     """An engine's own error as a lognormal dispersion [-]: the root mean square of
     ln(1 + e) over its relative peak errors e = max|phi| / max|phi_ref| - 1 [-] on the evidence
@@ -559,7 +465,10 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
                            "reference": reference, "n_boot": n_boot, "seed": seed,
                            "level": 1 - ALPHA, "grid": grid.tolist(), "backends": {}}
     if record_ims is not None:
-        out["measures"] = im_efficiency(runs, record_ims, reference=reference)
+        from .fragility_measures import IM_BOOT, im_efficiency
+
+        out["measures"] = im_efficiency(runs, record_ims, reference=reference,
+                                        n_boot=min(n_boot, IM_BOOT), seed=seed)
     numerical = dict(numerical or {})
     ref = ok[ok["backend"] == reference]
     from ..engines.base import EngineSettings      # below uplift_tol: not uplifted
