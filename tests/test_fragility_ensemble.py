@@ -196,3 +196,18 @@ def test_the_command_exports_and_prints_the_new_numbers(cache, tmp_path, monkeyp
     assert main(argv[:6] + ["--scales", "0.01:0.02:2"] + argv[8:-1]) == 0
     text = capsys.readouterr().out
     assert "export: not written" in text and "no backend with a regular fit" in text
+
+
+def test_bad_tail_and_synthetic_names_fail_before_any_work(tmp_path, capsys):
+    """A negative --tail or a bad synthetic name is one line naming it, before any record is
+    written or any run made."""
+    from rockbench.cli.main import main
+
+    store = tmp_path / "store"
+    assert main(["fragility", "paper-asymmetric", "--records", "synthetic", "--tail", "-1",
+                 "--store", str(store)]) == 2
+    assert "tail" in capsys.readouterr().err
+    assert main(["fragility", "paper-asymmetric", "--records", "synthetic:n=0",
+                 "--store", str(store)]) == 2
+    assert "synthetic:n=N" in capsys.readouterr().err
+    assert not store.exists()

@@ -278,6 +278,7 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     if not (numerical is None or numerical == "measure" or isinstance(numerical, Mapping)):
         raise ParameterError("numerical", numerical, "'measure', None or engine -> beta_num")
     check_bootstrap(n_boot, seed)                 # every bound before any run
+    run_lengths(pd.DataFrame({"path": [], "t95": [], "duration": []}), tail)
     ladder = parse_scales(scales)
     names = resolve_engines(engines, name="engine")
     names = [REFERENCE] + [n for n in names if n != REFERENCE]
