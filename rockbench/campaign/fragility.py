@@ -109,11 +109,12 @@ def _ladder(scene: str, recs, median_pga: float, cfg: Mapping[str, Any], run: di
         return ladder, _pick(ladder, np.full(ladder.size, 0.5), cfg["engine_steps"])
     beta = min(max(a["dispersion"], _SPAN_BETA[0]), _SPAN_BETA[1])
     q = (np.arange(cfg["fine"]) + 0.5) / cfg["fine"]
-    fine = _steps(a["median"] * np.exp(beta * norm.ppf(q)), median_pga)
+    fine, first = np.unique(np.round(a["median"] * np.exp(beta * norm.ppf(q)) / median_pga, 6),
+                            return_index=True)
     ladder = np.unique(np.concatenate([_steps(targets, median_pga), fine]))
     if cfg["engine_steps"] is None:
         return ladder, ladder
-    return ladder, _pick(fine, q[:fine.size], cfg["engine_steps"])
+    return ladder, _pick(fine, q[first], cfg["engine_steps"])
 
 
 def _pick(steps: np.ndarray, p: np.ndarray, k: int | None) -> np.ndarray:

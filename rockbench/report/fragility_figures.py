@@ -194,18 +194,27 @@ def fragility_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
 
 def measures_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
     """One row per intensity measure (``analysis["measures"]``), per backend its dispersion
-    [-] with its rank (1: the most efficient) and its median [the measure's unit]; empty
-    without the table."""
+    [-] with its rank (1: the most efficient), the share [%] of resampled ensembles of records
+    in which its family is the most efficient, and its median [the measure's unit]; the
+    analytic model on its whole ladder (``measures_full``) last. Empty without the table."""
     m = analysis.get("measures")
     if not m:
         return pd.DataFrame()
+    cols = list(m["backends"].items())
+    full = (analysis.get("measures_full") or {}).get("backends", {})
+    ref = analysis.get("reference", m.get("reference", "analytic"))
+    if ref in full:
+        cols.append((f"{ref} (whole ladder)", full[ref]))
     rows = []
     for k, d in m["measures"].items():
         row = {"intensity measure": d["name"], "unit": d["unit"]}
-        for b, v in m["backends"].items():
+        for b, v in cols:
             f = v["fits"][k]
             row[f"{b}: dispersion [-] (rank)"] = (f"{f['dispersion']:.3f} ({f['rank']})"
                                                  if f["rank"] is not None else "no fit")
+            share = (v.get("p_best") or {}).get(f.get("family", k))
+            row[f"{b}: most efficient in [%] of resamples"] = (
+                100.0 * share if share is not None else math.nan)
             row[f"{b}: median [unit]"] = f["median"]
         rows.append(row)
     return pd.DataFrame(rows)

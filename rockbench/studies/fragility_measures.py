@@ -85,7 +85,8 @@ def im_efficiency(runs: pd.DataFrame, record_ims: pd.DataFrame, *,
     dimensionless measure is a constant multiple of its base measure for one structure
     (:data:`rockbench.studies.intensity.BASE_MEASURE`): the same dispersion, so the two rank as
     one ("family"). Returns ``measures`` (key -> name, unit, definition) and per backend:
-    ``fits`` (key -> median [unit], dispersion [-], note, rank: 1 the smallest dispersion,
+    ``fits`` (key -> median [unit], dispersion [-], note, family (its family's name), rank: 1
+    the smallest dispersion,
     shared within a family and by fits at the dispersion's lower bound, which the sample
     cannot order; None without a regular fit), ``ranking`` (the families, each named by its
     first measure in ``measures``, smallest dispersion first), ``best`` (the first family;
@@ -129,6 +130,7 @@ def im_efficiency(runs: pd.DataFrame, record_ims: pd.DataFrame, *,
         levels = sorted(set(fam.values()))
         for k in measures:
             fits[k]["rank"] = levels.index(fam[rep[k]]) + 1 if rep[k] in fam else None
+            fits[k]["family"] = rep[k]
         out["backends"][b] = {"fits": fits, "ranking": ranking,
                               "best": ranking[0] if ranking else None,
                               "best_set": [f for f in ranking if fam[f] == fam[ranking[0]]]}
