@@ -2,8 +2,9 @@
 only; the work is :mod:`rockbench.studies.fragility`.
 
     rockbench fragility SCENE --records DIR|FILE|NAME ... [--engine E ...] [--scales LO:HI:N]
-                        [--intensity pga|pgv] [--boot N] [--seed S] [--setting ENGINE.KEY=VALUE ...]
-                        [--dt S] [--set KEY=VALUE ...] [--json] [--store DIR]
+                        [--intensity pga|pgv|pga_norm|pgv_norm|sa] [--boot N] [--seed S]
+                        [--setting ENGINE.KEY=VALUE ...] [--dt S] [--set KEY=VALUE ...]
+                        [--tail S] [--no-numerical] [--export DIR] [--json] [--store DIR]
                         [--workers N | --scheduler ADDR] [-q]
 """
 
@@ -14,6 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..studies.intensity import MEASURES
 from .common import (add_engine_option, add_quiet_option, add_setting_option, arg_count,
                      arg_key_value, print_json)
 
@@ -36,15 +38,29 @@ def add_fragility_command(sub) -> None:
                    action="append", default=[], help="override a scene parameter")
     p.add_argument("--records", nargs="+", action="extend", required=True,
                    metavar="DIR|FILE|NAME",
-                   help="record folders, record files, or a bundled ensemble name "
-                        "(bundled, or a folder shipped under rockbench/records)")
+                   help="record folders, record files, a bundled ensemble name "
+                        "(bundled, or a folder shipped under rockbench/records), or the "
+                        "synthetic ensemble: synthetic (20 records, seed 0), "
+                        "synthetic:seed=S or synthetic:n=N,seed=S (docs/synthetic.md)")
 
     add_engine_option(p, "every available backend; the analytic model always runs")
     p.add_argument("--scales", default="0.25:2:8", metavar="LO:HI:N",
                    help="ladder of scale factors of every record, N evenly spaced from LO to "
                         "HI inclusive (default 0.25:2:8)")
-    p.add_argument("--intensity", choices=("pga", "pgv"), default="pga",
-                   help="intensity measure: pga [m/s^2] (default) or pgv [m/s]")
+    p.add_argument("--intensity", choices=tuple(MEASURES), default="pga",
+                   help="intensity measure of the curves: pga [m/s^2] (default), pgv [m/s], "
+                        "pga_norm = PGA/(g tan alpha) [-], pgv_norm = PGV/(p g tan alpha) [-], "
+                        "sa = Sa(2 pi / p) [m/s^2]; the table of every measure's dispersion "
+                        "is printed whichever is chosen")
+    p.add_argument("--tail", type=float, default=None, metavar="S",
+                   help="end each run S seconds after the record's strong motion (95 %% of "
+                        "its Arias intensity); default: the whole record + 10 s")
+    p.add_argument("--no-numerical", dest="numerical", action="store_false",
+                   help="do not measure the engines' own error on the scene (beta_num; "
+                        "measured by default on the scene's pulses at the settings used)")
+    p.add_argument("--export", metavar="DIR",
+                   help="write the fitted curves to DIR/fragility.xml (OpenQuake NRML) and "
+                        "DIR/fragility.csv (pelicun), docs/fragility-export.md")
     p.add_argument("--boot", type=arg_count, default=1000, metavar="N",
                    help="bootstrap resamples of the records (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
@@ -62,19 +78,26 @@ def add_fragility_command(sub) -> None:
 
 
 def summary(frag) -> dict[str, Any]:
-    """The JSON the command prints: per backend ``median``, ``dispersion``, their intervals,
-    and (engines) the test's ``statistic`` and ``p_value`` and the verdict."""
+    """The JSON the command prints: the ensemble, per backend ``median``, ``dispersion``, their
+    intervals, ``dispersion_numerical`` and ``dispersion_total``, the most efficient measure,
+    and (engines) the test's ``statistic`` and ``p_value`` and the verdict; ``measures``: the
+    intensity-measure table; ``numerical``: how each engine's beta_num was measured."""
     a = frag.analysis
-    keep = ("median", "median_ci", "dispersion", "dispersion_ci", "runs", "not_ok",
+    keep = ("median", "median_ci", "dispersion", "dispersion_ci", "dispersion_numerical",
+            "dispersion_total", "im_best", "im_same_best", "runs", "not_ok", "outside_model",
             "overturned", "records", "note", "n_valid_resamples", "cpu_s", "statistic",
             "p_value", "median_difference", "median_difference_ci", "indistinguishable",
             "verdict", "tests")
     return {"scene": frag.scene, "intensity": a["intensity"], "reference": a["reference"],
+            "ensemble": {k: v for k, v in a.get("ensemble", {}).items() if k != "text"},
             "records": len(frag.records), "scales": frag.scales,
-            "engine_scales": frag.info.get("engine_scales"), "level": a["level"],
+            "engine_scales": frag.info.get("engine_scales"), "tail": a.get("tail"),
+            "structure": a.get("structure"), "level": a["level"],
             "n_boot": a["n_boot"], "seed": a["seed"], "store": frag.store,
             "backends": {b: {k: v[k] for k in keep if k in v}
-                         for b, v in a["backends"].items()}}
+                         for b, v in a["backends"].items()},
+            "measures": a.get("measures"), "numerical": a.get("numerical", {}),
+            "validity": a.get("validity")}
 
 
 def _interval(ci) -> str:
@@ -83,7 +106,8 @@ def _interval(ci) -> str:
 
 
 def cmd_fragility(args: argparse.Namespace) -> int:
-    from .common import engine_names, engine_settings, load_scene_from, scene_overrides
+    from .common import (engine_names, engine_settings, load_scene_from, output_folder,
+                         scene_overrides)
     from ..studies.fragility import run_fragility
     from ..runner import REFERENCE, resolve_engines
 
@@ -95,13 +119,26 @@ def cmd_fragility(args: argparse.Namespace) -> int:
     selected = [e for e in (engines or resolve_engines(None)) if e != REFERENCE]
     settings = engine_settings(list(args.settings), selected, dt=args.dt, also=(REFERENCE,))
     store = args.store or str(Path("fragility") / Path(args.scene).stem)
+    if args.export:
+        output_folder(Path(args.export) / "fragility.xml", "--export")
     frag = run_fragility(args.scene, args.records, engines=engines, scales=args.scales,
                          measure=args.intensity, settings=settings,
                          overrides=scene_overrides(args.overrides) or None, store=store,
                          workers=args.workers, scheduler=args.scheduler,
                          progress=not (args.quiet or args.json), n_boot=args.boot,
-                         seed=args.seed)
+                         seed=args.seed, tail=args.tail,
+                         numerical="measure" if args.numerical else None)
     out = summary(frag)
+    if args.export:
+        from ..errors import ParameterError
+        from ..studies.fragility_export import write_fragility_exports
+
+        try:
+            written = write_fragility_exports(frag.analysis, args.export, runs=frag.runs,
+                                              record_ims=frag.records)
+            out["export"] = {k: str(v) for k, v in written.items()}
+        except ParameterError as e:            # no curve to write: said, not an error
+            out["export"] = {"error": f"not written: {e}"}
     if args.json:
         print_json(out)
         return 0
@@ -121,5 +158,27 @@ def cmd_fragility(args: argparse.Namespace) -> int:
     for b, v in out["backends"].items():
         if "verdict" in v:
             print(v["verdict"])
+    print(f"ensemble: {frag.analysis['ensemble']['text']}")
+    if (out.get("validity") or {}).get("text"):
+        print(out["validity"]["text"])
+    print("dispersion: record-to-record beta_RR, the engine's own beta_num (its error on the "
+          "scene's pulses at this setting), beta_total = sqrt(beta_RR^2 + beta_num^2) [-]")
+    for b, v in out["backends"].items():
+        print(f"  {b:10s} beta_RR {v['dispersion']:.3g}, beta_num "
+              f"{v['dispersion_numerical']:.2g}, beta_total {v['dispersion_total']:.3g}")
+    m = out.get("measures")
+    if m:
+        st = out["structure"]
+        print(f"intensity measures (dispersion [-], rank; Sa at T_p = 2 pi / p = "
+              f"{st['sa_period']:.3g} s):")
+        for b, v in m["backends"].items():
+            print(f"  {b:10s} " + ", ".join(
+                f"{m['measures'][k]['name']} {f['dispersion']:.3g} ({f['rank']})"
+                for k, f in v["fits"].items() if f["rank"] is not None))
+        for v in m["backends"].values():
+            if "sentence" in v:
+                print(v["sentence"])
+    if args.export:
+        print("export: " + ", ".join(out["export"].values()))
     print(f"store: {frag.store}")
     return 0

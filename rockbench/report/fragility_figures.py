@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from . import figures as F
 
 __all__ = ["plot_fragility", "plot_fig9", "plot_peak_stripes", "fragility_table",
-           "fragility_html"]
+           "measures_table", "fragility_html"]
 
 _WIDTH = 11.6      # in: the page's content width (1160 px) at 100 dpi
 _FONT = 10         # pt
@@ -101,20 +101,21 @@ def plot_fragility(analysis: Mapping[str, Any], runs: pd.DataFrame, *,
 
 
 def plot_fig9(frames: Mapping[str, pd.DataFrame], *, scale: float = 1.0,
-              title: str | None = None) -> Figure:
+              scales: Mapping[str, float] | None = None, title: str | None = None) -> Figure:
     """The paper's Fig. 9 from fragility runs: the peak rotation max |phi| / alpha [-] per record
-    and direction at one ``scale`` (the nearest step, in ratio, that every backend ran, on the
-    records every backend ran), one panel per
+    and direction at one ``scale`` (per frame: ``scales[label]`` when given; the nearest step,
+    in ratio, that every backend ran, on the records every backend ran), one panel per
     frame (``frames``: label -> runs), every backend beside the analytic model
     (:func:`rockbench.report.figures.plot_record_peaks`)."""
     parts = []
     for label, runs in frames.items():
+        target = (scales or {}).get(label, scale)
         if not len(runs):
             continue
         # the steps every backend ran (the engines may run a part of the ladder)
         per = [set(np.round(g["scale"], 9)) for _, g in runs.groupby("backend")]
         steps = np.array(sorted(set.intersection(*per) or set(np.round(runs["scale"], 9))))
-        s = steps[np.argmin(np.abs(np.log(steps / scale)))]
+        s = steps[np.argmin(np.abs(np.log(steps / target)))]
         g = runs[np.isclose(runs["scale"], s)]
         g = g[g["record"].isin(set.intersection(*[set(x["record"]) for _, x in
                                                  g.groupby("backend")]))]
@@ -165,9 +166,10 @@ def plot_peak_stripes(runs: pd.DataFrame, *, title: str | None = None) -> Figure
 
 
 def fragility_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
-    """One row per backend: median and dispersion with their 95 % intervals, runs, overturned,
-    and (engines) the smallest KS p-value, its statistic, the median difference with its
-    interval, and the verdict."""
+    """One row per backend: median and record-to-record dispersion with their 95 % intervals,
+    the numerical dispersion beta_num and beta_total = sqrt(beta_RR^2 + beta_num^2), runs,
+    overturned, and (engines) the smallest KS p-value, its statistic, the median difference
+    with its interval, and the verdict."""
     unit = analysis["intensity"]["unit"]
     rows = []
     for b, v in analysis["backends"].items():
@@ -175,9 +177,11 @@ def fragility_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
         dlo, dhi = v.get("median_difference_ci", [math.nan] * 2)
         rows.append({"backend": b, f"median [{unit}]": v["median"],
                      "median 95 % interval": f"{lo:.3g} to {hi:.3g}",
-                     "dispersion [-]": v["dispersion"],
+                     "dispersion beta_RR [-]": v["dispersion"],
                      "dispersion 95 % interval": "{:.3g} to {:.3g}".format(
                          *v.get("dispersion_ci", [math.nan] * 2)),
+                     "beta_num [-]": v.get("dispersion_numerical", math.nan),
+                     "beta_total [-]": v.get("dispersion_total", math.nan),
                      "runs": v["runs"], "overturned": v["overturned"],
                      "not ok": v["not_ok"], "KS statistic [-]": v.get("statistic", math.nan),
                      "smallest p": v.get("p_value", math.nan),
@@ -186,6 +190,53 @@ def fragility_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
                                                   if "median_difference_ci" in v else ""),
                      "verdict": v.get("verdict", "reference")})
     return pd.DataFrame(rows)
+
+
+def measures_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
+    """One row per intensity measure (``analysis["measures"]``), per backend its dispersion
+    [-] with its rank (1: the most efficient), the share [%] of resampled ensembles of records
+    in which its family is the most efficient, and its median [the measure's unit]; the
+    analytic model on its whole ladder (``measures_full``) last. Empty without the table."""
+    m = analysis.get("measures")
+    if not m:
+        return pd.DataFrame()
+    cols = list(m["backends"].items())
+    full = (analysis.get("measures_full") or {}).get("backends", {})
+    ref = analysis.get("reference", m.get("reference", "analytic"))
+    if ref in full:
+        cols.append((f"{ref} (whole ladder)", full[ref]))
+    rows = []
+    for k, d in m["measures"].items():
+        row = {"intensity measure": d["name"], "unit": d["unit"]}
+        for b, v in cols:
+            f = v["fits"][k]
+            row[f"{b}: dispersion [-] (rank)"] = (f"{f['dispersion']:.3f} ({f['rank']})"
+                                                 if f["rank"] is not None else "no fit")
+            share = (v.get("p_best") or {}).get(f.get("family", k))
+            row[f"{b}: most efficient in [%] of resamples"] = (
+                100.0 * share if share is not None else math.nan)
+            row[f"{b}: median [unit]"] = f["median"]
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _numerical_sentence(analysis: Mapping[str, Any]) -> str:
+    """How beta_num was measured, per engine, in words with units."""
+    num = analysis.get("numerical") or {}
+    bits = []
+    for e, v in num.items():
+        if "cases" in v:
+            bits.append(f"{e} at {v['setting']}: {v['cases']} pulses, worst |peak error| "
+                        f"{100 * v['worst']:.2g} %, beta_num {v['beta']:.2g}")
+        else:
+            bits.append(f"{e}: beta_num {v['beta']:.2g} (given)")
+    if not bits:
+        return ("beta_num: not measured (NaN); beta_total is then NaN for the engines.")
+    return ("beta_num is each engine's own error on this frame at the setting these runs use: "
+            "the RMS of ln(1 + e) over its relative peak errors e against the analytic model "
+            "on the frame's surviving Ricker pulses of the work-precision evidence (away from "
+            "the overturning boundary); beta_total = sqrt(beta_RR^2 + beta_num^2). "
+            + "; ".join(bits) + ".")
 
 
 def fragility_html(section: Mapping[str, Any], figdir=None) -> str:
@@ -217,9 +268,36 @@ def fragility_html(section: Mapping[str, Any], figdir=None) -> str:
             "test compares these distributions (overturned runs ranked above every survivor).",
             name=f"fragility_peaks_{i}", png_dir=figdir))
         parts.append(H.html_table(fragility_table(a), graded=False, scroll=True))
+        if (a.get("validity") or {}).get("text"):
+            parts.append(f"<p>{H.fmt(a['validity']['text'])}</p>")
+        parts.append(f"<p>{H.fmt(_numerical_sentence(a))}</p>")
+        mt = measures_table(a)
+        if len(mt):
+            st = a.get("structure") or {}
+            parts.append(
+                "<p>Efficiency of the intensity measures (the dispersion beta_RR of the fit "
+                "against each; the smaller, the less record-to-record spread is left), on the "
+                "runs the engines and the analytic model both made"
+                + (f"; Sa at T_p = 2 pi / p = {st['sa_period']:.3g} s" if st else "")
+                + ". A dimensionless measure has its dimensional one's dispersion for one "
+                  "frame (they rank together).</p>")
+            parts.append(H.html_table(mt, graded=False, scroll=True))
+            sent = [v["sentence"] for v in a["measures"]["backends"].values() if "sentence" in v]
+            if sent:
+                parts.append("<ul>" + "".join(f"<li>{H.fmt(t)}</li>" for t in sent) + "</ul>")
+    exports = section.get("exports") or {}
+    if exports:
+        parts.append("<p>The fitted curves for risk tools (docs/fragility-export.md): "
+                     + ", ".join(H.fmt(str(p)) for p in exports.values())
+                     + " (OpenQuake NRML .xml, pelicun .csv; measures.csv: the "
+                       "intensity-measure table).</p>")
+    if section.get("export_error"):
+        parts.append(f"<p>The curves could not be written: {H.fmt(section['export_error'])}</p>")
     if section.get("fig9"):
         parts.append(H.figure_html(
             plot_fig9({f["label"]: f["runs"] for f in section["frames"]},
+                      scales={f["label"]: f["fig9_scale"] for f in section["frames"]
+                              if "fig9_scale" in f},
                       title="Peak rotation per record and direction (paper Fig. 9)"),
             "The paper's Fig. 9 over this ensemble: max |phi| / alpha [-] per record, as "
             "recorded (filled) and reversed (open), every backend beside the analytic model; "

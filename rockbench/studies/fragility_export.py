@@ -36,7 +36,7 @@ from .fragility import MEASURES
 
 __all__ = ["LIMIT_STATE", "NRML_NAMESPACE", "OPENQUAKE_IMT", "PELICUN_DEMAND",
            "PELICUN_COLUMNS", "FragilityCurve", "curves_from_analysis", "lognormal_moments",
-           "lognormal_from_moments", "to_nrml", "to_pelicun_csv"]
+           "lognormal_from_moments", "to_nrml", "to_pelicun_csv", "write_fragility_exports"]
 
 #: The one limit state of a rocking frame's fragility.
 LIMIT_STATE = "overturning"
@@ -67,7 +67,7 @@ class FragilityCurve:
     """One fitted lognormal fragility curve of overturning: ``id`` (the backend's name, or a
     taxonomy string: letters, digits, ``-``, ``_``, at most 100 characters), ``median`` theta
     (> 0) [IM unit: m/s^2 for PGA, m/s for PGV], ``dispersion`` beta (> 0) [-], ``measure``
-    a key of :data:`rockbench.studies.fragility.MEASURES`."""
+    ``pga`` or ``pgv`` (:data:`OPENQUAKE_IMT`: the measures both tools read)."""
 
     id: str
     median: float
@@ -83,8 +83,9 @@ class FragilityCurve:
             if x <= 0.0:
                 raise ParameterError(name, getattr(self, name), "> 0 (a regular fit)")
             object.__setattr__(self, name, x)
-        if self.measure not in MEASURES:
-            raise ParameterError("measure", self.measure, f"one of {', '.join(MEASURES)}")
+        if self.measure not in OPENQUAKE_IMT:
+            raise ParameterError("measure", self.measure, f"one of {', '.join(OPENQUAKE_IMT)} "
+                                 "(the measures both tools read)")
 
     @property
     def unit(self) -> str:
@@ -96,14 +97,24 @@ class FragilityCurve:
         return 0.5 * math.erfc(-math.log(x / self.median) / (self.dispersion * math.sqrt(2.0)))
 
 
-def curves_from_analysis(analysis: Mapping[str, Any]) -> list[FragilityCurve]:
+def curves_from_analysis(analysis: Mapping[str, Any], measure: str | None = None
+                         ) -> list[FragilityCurve]:
     """The curves of :func:`rockbench.studies.fragility.analyse`'s output: one per backend with
-    a regular fit (finite median and dispersion), in the analysis's order, with the analysis's
-    intensity measure. Backends without one (no run overturned, or every run) are left out;
-    ParameterError if none is left."""
+    a regular fit (finite median and dispersion), in the analysis's order, against ``measure``
+    (default: the analysis's intensity measure; another one is read from the analysis's
+    intensity-measure table, ``analysis["measures"]``). Backends without one (no run
+    overturned, or every run) are left out; ParameterError if none is left."""
     key = analysis.get("intensity", {}).get("key", "pga")
+    fits = {name: b for name, b in analysis.get("backends", {}).items()}
+    if measure is not None and measure != key:
+        if measure not in MEASURES:
+            raise ParameterError("measure", measure, f"one of {', '.join(MEASURES)}")
+        table = (analysis.get("measures") or {}).get("backends", {})
+        fits = {name: table[name]["fits"][measure] for name in fits
+                if measure in table.get(name, {}).get("fits", {})}
+        key = measure
     out = []
-    for name, b in analysis.get("backends", {}).items():
+    for name, b in fits.items():
         med, disp = b.get("median"), b.get("dispersion")
         if med is not None and disp is not None and math.isfinite(med) and math.isfinite(disp):
             out.append(FragilityCurve(str(name), float(med), float(disp), key))
@@ -244,6 +255,39 @@ def to_pelicun_csv(curves: Sequence[FragilityCurve] | FragilityCurve,
         w.writerows(rows)
 
     _open(path_or_file, write)
+
+
+def write_fragility_exports(analysis: Mapping[str, Any], folder: str | os.PathLike, *,
+                            stem: str = "fragility", runs: Any = None,
+                            record_ims: Any = None) -> dict[str, Any]:
+    """Write the curves of ``analysis`` (:func:`curves_from_analysis`) in both formats into
+    ``folder`` (created): ``<stem>.xml`` (:func:`to_nrml`, model id ``stem``) and
+    ``<stem>.csv`` (:func:`to_pelicun_csv`). The measure is the analysis's when the tools know
+    it (:data:`OPENQUAKE_IMT`: PGA, PGV), else PGA from its intensity-measure table. The range
+    of the NRML functions is the range of the runs' intensities in that measure: ``runs`` (the
+    runs frame: scale, record) times ``record_ims`` (the records' measures) when both are given,
+    else the analysis's grid (its own measure only). Returns {file name: path}."""
+    from pathlib import Path
+
+    key = analysis.get("intensity", {}).get("key", "pga")
+    measure = key if key in OPENQUAKE_IMT else "pga"
+    curves = curves_from_analysis(analysis, None if measure == key else measure)
+    if runs is not None and record_ims is not None and len(runs):
+        of = dict(zip(record_ims["record"], record_ims[measure]))
+        x = [float(s) * float(of[r]) for s, r in zip(runs["scale"], runs["record"])]
+        lo, hi = min(x), max(x)
+    elif measure == key:
+        lo, hi = float(analysis["grid"][0]), float(analysis["grid"][-1])
+    else:
+        raise ParameterError("record_ims", None, f"the runs and the records' measures, to give "
+                             f"the range of the {MEASURES[measure][0]} curves")
+    root = Path(folder)
+    root.mkdir(parents=True, exist_ok=True)
+    mid = stem if _OQ_ID.match(stem) else "rockbench_overturning"
+    xml, table = root / f"{stem}.xml", root / f"{stem}.csv"
+    to_nrml(curves, xml, id=mid, min_iml=lo, max_iml=hi if hi > lo else lo * 1.000001)
+    to_pelicun_csv(curves, table)
+    return {xml.name: xml, table.name: table}
 
 
 def _text(writer, *args, **kwargs) -> str:

@@ -9,13 +9,17 @@
 * :func:`peak_test` - Kolmogorov-Smirnov two-sample test of two peak samples, overturned runs
   right-censored (ranked above every finite peak);
 * :func:`stripes` - per scale step: counts, overturning fraction, the survivors' peaks;
-* :func:`analyse` - all of the above for a frame of runs, with one verdict sentence per engine.
+* :func:`numerical_dispersion`, :func:`combine_dispersions` - an engine's own error as a
+  lognormal dispersion beside the record-to-record one, beta_total = sqrt(beta_RR^2 + beta_num^2);
+* :func:`analyse` - all of the above for a frame of runs, with one verdict sentence per engine,
+  and the efficiency table of the intensity measures
+  (:func:`rockbench.studies.fragility_measures.im_efficiency`).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -23,8 +27,9 @@ import pandas as pd
 from ..errors import ParameterError
 from .intensity import MEASURES
 
-__all__ = ["ALPHA", "N_BOOT", "BETA_MIN", "BETA_MAX", "MIN_RECORDS", "fit_lognormal",
-           "fragility_curve", "check_bootstrap", "bootstrap", "peak_test", "stripes", "analyse"]
+__all__ = ["ALPHA", "N_BOOT", "BETA_MIN", "BETA_MAX", "MIN_RECORDS", "AT_BOUND",
+           "fit_lognormal", "fragility_curve", "check_bootstrap", "bootstrap", "peak_test",
+           "stripes", "numerical_dispersion", "combine_dispersions", "analyse"]
 
 #: Significance level of the tests (intervals: two-sided 1 - ALPHA); bootstrap resamples.
 ALPHA, N_BOOT = 0.05, 1000
@@ -33,6 +38,8 @@ BETA_MIN, BETA_MAX = 1e-3, 5.0
 #: Fewest records for a verdict (n records give at most C(2n - 1, n) distinct bootstrap
 #: resamples: 6435 for 8, 3 for 2; and the KS test on 2 n runs has little power below that).
 MIN_RECORDS = 8
+#: Dispersions at or below this [-] are the fit's lower bound (separation): they tie.
+AT_BOUND = BETA_MIN * 1.01
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
@@ -93,6 +100,14 @@ def _fit_counts(x: np.ndarray, n: np.ndarray, z: np.ndarray) -> dict[str, Any]:
                        "median at their geometric mean, dispersion at its bound")
         return out
     tau_lo, tau_hi = math.log(BETA_MIN), math.log(BETA_MAX)
+    newton = _probit_newton(lx, n, z)
+    if newton is not None:
+        mu, beta = newton
+        out["median"], out["dispersion"] = math.exp(mu), beta
+        if beta <= BETA_MIN * 1.01:
+            out["note"] = ("overturning separated by intensity (a step): dispersion at its "
+                           "bound")
+        return out
 
     def nll(p: np.ndarray) -> tuple[float, np.ndarray]:
         # p = (ln theta, ln beta); BFGS (pure NumPy on 2-vectors: no threaded BLAS call,
@@ -118,6 +133,83 @@ def _fit_counts(x: np.ndarray, n: np.ndarray, z: np.ndarray) -> dict[str, Any]:
     if beta <= BETA_MIN * 1.01:
         out["note"] = "overturning separated by intensity (a step): dispersion at its bound"
     return out
+
+
+def _probit_newton(lx: np.ndarray, n: np.ndarray, z: np.ndarray, *, iterations: int = 60
+                   ) -> tuple[float, float] | None:
+    """The maximum of the same likelihood by Newton's method: with u = a + b (ln x - m) (m the
+    mean of ln x; theta = exp(m - a / b), beta = 1 / b) it is a binomial probit regression,
+    whose log-likelihood is concave in (a, b), so Newton's steps (halved until the likelihood
+    grows) reach the one maximum. When that maximum lies outside beta in [BETA_MIN, BETA_MAX]
+    (or at infinity: runs almost separated by intensity) the bounded maximum is on one of the
+    two faces beta = BETA_MIN, beta = BETA_MAX (a concave function on a slab), found by
+    Newton's method in a alone on each. Returns (ln theta, beta), or None when a Newton
+    iteration fails (:func:`_fit_counts` then takes its bounded optimizer). A fit costs a few
+    dozen array operations: the bootstrap refits thousands."""
+    from scipy.special import log_ndtr
+
+    m = float(np.mean(lx))
+    c = lx - m
+    f = n - z
+    b_lo, b_hi = 1.0 / BETA_MAX, 1.0 / BETA_MIN
+
+    def loglik(a: float, b: float) -> float:
+        u = a + b * c
+        return float(np.sum(z * log_ndtr(u) + f * log_ndtr(-u)))
+
+    def derivatives(a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+        u = a + b * c
+        lp = -0.5 * u * u - _LOG_SQRT_2PI
+        l1, l2 = np.exp(lp - log_ndtr(u)), np.exp(lp - log_ndtr(-u))
+        return (z * l1 - f * l2,                               # d loglik / du
+                -z * l1 * (u + l1) - f * l2 * (l2 - u))        # d2 loglik / du2 (< 0)
+
+    def newton(a: float, b: float, free_b: bool) -> tuple[float, float, float, bool]:
+        ll = loglik(a, b)
+        for _ in range(iterations):
+            g, h = derivatives(a, b)
+            ga, haa = float(np.sum(g)), float(np.sum(h))
+            if free_b:
+                gb, hab, hbb = float(np.sum(g * c)), float(np.sum(h * c)), float(
+                    np.sum(h * c * c))
+                det = haa * hbb - hab * hab
+                if not (det > 0.0 and haa < 0.0):
+                    return a, b, ll, False
+                da, db = -(hbb * ga - hab * gb) / det, -(haa * gb - hab * ga) / det
+            else:
+                if not haa < 0.0:
+                    return a, b, ll, False
+                da, db = -ga / haa, 0.0
+            step = 1.0
+            while True:
+                na, nb = a + step * da, b + step * db
+                nl = loglik(na, nb)
+                if nl >= ll - 1e-12 * abs(ll) or step < 1e-6:
+                    break
+                step *= 0.5
+            a, b, ll = na, nb, nl
+            if not (math.isfinite(a) and math.isfinite(b)):
+                return a, b, ll, False
+            if abs(step * da) < 1e-11 * (1.0 + abs(a)) and \
+                    abs(step * db) < 1e-11 * (1.0 + abs(b)):
+                return a, b, ll, True
+        return a, b, ll, False
+
+    t0 = c[np.argmin(np.abs(z / n - 0.5))]
+    a, b, _, done = newton(-2.0 * t0, 2.0, True)   # from beta = 0.5 through the crossing of 1/2
+    if not (done and b_lo <= b <= b_hi):
+        faces = []
+        for bb in (b_lo, b_hi):
+            fa, fb, fl, ok = newton(-bb * t0, bb, False)
+            if not ok:
+                return None
+            faces.append((fl, fa, fb))
+        _, a, b = max(faces)
+    beta = 1.0 / b
+    mu = m - a * beta
+    if not lx.min() - 3.0 <= mu <= lx.max() + 3.0:
+        return None
+    return mu, beta
 
 
 def fragility_curve(x: Sequence[float], median: float, dispersion: float) -> np.ndarray:
@@ -261,20 +353,50 @@ def _holm(p: Sequence[float], alpha: float = ALPHA) -> np.ndarray:
     return reject
 
 
+# ------------------------------------------------------------------- numerical error
+def numerical_dispersion(peak_errors: Sequence[float]) -> float:
+    """An engine's own error as a lognormal dispersion [-]: the root mean square of
+    ln(1 + e) over its relative peak errors e = max|phi| / max|phi_ref| - 1 [-] on the evidence
+    (the maximum-likelihood dispersion of a lognormal error of median 1, a bias counted as
+    spread); inf when an error is not finite (a run that failed), NaN for no error."""
+    e = np.asarray(list(peak_errors), dtype=float)
+    if e.size == 0:
+        return math.nan
+    if not np.all(np.isfinite(e)) or np.any(e <= -1.0):
+        return math.inf
+    return float(np.sqrt(np.mean(np.log1p(e) ** 2)))
+
+
+def combine_dispersions(*betas: float) -> float:
+    """sqrt(sum beta_i^2) [-]: the dispersion of a sum of independent normal terms in ln IM (how
+    the field combines independent lognormal uncertainties, e.g. FEMA P-695 (2009) Sec. 7.3:
+    beta_total = sqrt(beta_RR^2 + beta_num^2)). NaN if any term is NaN, inf if any is inf."""
+    b = np.asarray(betas, dtype=float)
+    if np.any(np.isnan(b)):
+        return math.nan
+    if np.any(b < 0):
+        raise ParameterError("dispersion", betas, "terms >= 0")
+    return float(np.sqrt(np.sum(b * b)))
+
+
 # ------------------------------------------------------------------------- the analysis
 def _fmt(x: float) -> str:
     return f"{x:.3g}" if math.isfinite(x) else "nan"
 
 
 def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], unit: str,
-             name: str, reference: str, n_records: int) -> tuple[bool | None, str]:
+             name: str, reference: str, n_records: int,
+             ran_records: int | None = None) -> tuple[bool | None, str]:
     """(indistinguishable, sentence) of one engine (rules: :func:`analyse`)."""
     tested = [t for t in tests if math.isfinite(t["p_value"])]
     if not tested:
         return None, f"{engine}: no intensity where both ran: not judged."
     pmin = min(t["p_value"] for t in tested)
     if n_records < MIN_RECORDS:
-        return None, (f"{engine}: not judged: {n_records} record(s), fewer than {MIN_RECORDS} "
+        ran = (f" with runs that finished ok (of {ran_records} run; the others' runs diverged "
+               "or failed)" if ran_records is not None and ran_records > n_records else "")
+        return None, (f"{engine}: not judged: {n_records} record(s){ran}, fewer than "
+                      f"{MIN_RECORDS} "
                       f"(peak distributions at {len(tested)} intensities, smallest p = "
                       f"{_fmt(pmin)}; fragility median difference {_fmt(diff)} {unit}).")
     where = [t for t in tested if t["rejected"]]
@@ -302,7 +424,8 @@ def _verdict(engine: str, tests: list[dict], diff: float, ci: Sequence[float], u
 
 
 def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, seed: int = 0,
-            reference: str = "analytic") -> dict[str, Any]:
+            reference: str = "analytic", record_ims: pd.DataFrame | None = None,
+            numerical: Mapping[str, float] | None = None) -> dict[str, Any]:
     """The fragility analysis of ``runs`` (:data:`RUN_COLUMNS`; ``im`` in the unit of
     ``measure``).
 
@@ -319,6 +442,14 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
     distributions differ (Holm, family-wise 5 %) and the 95 % interval of the difference of
     the fragility medians holds 0; with fewer than :data:`MIN_RECORDS` records the engine is not
     judged (``indistinguishable`` None). Runs not ``ok`` (diverged, error) are left out of both.
+
+    With ``record_ims`` (the records' measures, :func:`rockbench.studies.ensembles.record_ims`)
+    the analysis has ``measures`` (:func:`im_efficiency`) and each backend ``im_best`` (its
+    most efficient measure) and, engines, ``im_same_best``. ``numerical``: engine -> beta_num
+    [-], its own error as a dispersion (:func:`numerical_dispersion`); each backend gets
+    ``dispersion_numerical`` (0 for ``reference``, NaN when not given) and
+    ``dispersion_total`` = sqrt(dispersion^2 + dispersion_numerical^2)
+    (:func:`combine_dispersions`).
     """
     if measure not in MEASURES:
         raise ParameterError("intensity", measure, f"one of {', '.join(MEASURES)}")
@@ -333,6 +464,12 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
                                          "definition": definition},
                            "reference": reference, "n_boot": n_boot, "seed": seed,
                            "level": 1 - ALPHA, "grid": grid.tolist(), "backends": {}}
+    if record_ims is not None:
+        from .fragility_measures import IM_BOOT, im_efficiency
+
+        out["measures"] = im_efficiency(runs, record_ims, reference=reference,
+                                        n_boot=min(n_boot, IM_BOOT), seed=seed)
+    numerical = dict(numerical or {})
     ref = ok[ok["backend"] == reference]
     from ..engines.base import EngineSettings      # below uplift_tol: not uplifted
     floor = EngineSettings.uplift_tol
@@ -349,6 +486,16 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
             "runs": int(len(g)), "not_ok": int((g["status"] != "ok").sum()),
             "overturned": int(f["n_overturned"]), "note": f["note"],
             "records": int(g["record"].nunique()), "cpu_s": float(g["cpu_s"].sum())}
+        if "outside" in g:
+            res["outside_model"] = int(g["outside"].astype(bool).sum())
+        num = 0.0 if b == reference else float(numerical.get(b, math.nan))
+        res["dispersion_numerical"] = num
+        res["dispersion_total"] = combine_dispersions(f["dispersion"], num)
+        if "measures" in out:
+            im = out["measures"]["backends"].get(b, {})
+            res["im_best"] = im.get("best")
+            if b != reference:
+                res["im_same_best"] = im.get("same_best")
         if b != reference and len(ref):
             tests = []
             mine = ok[ok["backend"] == b]
@@ -366,7 +513,7 @@ def analyse(runs: pd.DataFrame, *, measure: str = "pga", n_boot: int = N_BOOT, s
             diff = res["median"] - fits.get(reference, {}).get("median", math.nan)
             ci = bt.get("median_difference_ci", [math.nan, math.nan])
             same, text = _verdict(b, tests, diff, ci, unit, name, reference,
-                                  int(mine["record"].nunique()))
+                                  int(mine["record"].nunique()), int(g["record"].nunique()))
             res.update(tests=tests, statistic=worst["statistic"] if worst else math.nan,
                        p_value=worst["p_value"] if worst else math.nan,
                        median_difference=diff, median_difference_ci=ci,
