@@ -217,6 +217,22 @@ def test_the_maps_of_the_committed_engines_are_committed():
                 assert (scene, engine) in have, (scene, engine, grid)
 
 
+def test_every_committed_engine_map_reads_whole():
+    """Each committed map loads with every cell (a change of the store's format that left the
+    committed maps unreadable would otherwise only show as maps measured again)."""
+    import warnings
+    from pathlib import Path
+
+    from rockbench.sweep.map_store import load_map
+
+    root = Path(__file__).resolve().parents[1] / "reports" / "engine-maps"
+    for scene, engine, grid in _committed_maps():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            df = load_map(root / f"{scene}_{engine}_{grid[0]}x{grid[1]}.parquet")
+        assert len(df) == grid[0] * grid[1] * 4, (scene, engine, grid)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("scene, engine, grid", _committed_maps(),
                          ids=[f"{s}-{e}-{g[0]}x{g[1]}" for s, e, g in _committed_maps()])

@@ -467,6 +467,7 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
         frag = fragility_section(plan["record_frames"], names, records=fragility_records,
                                  size="full" if full else "default",
                                  store=S.store_path(store_dir, "fragility", keyed=False),
+                                 export_dir=out / "fragility-export",
                                  executor=executor, workers=workers, scheduler=dask_address,
                                  progress=progress)
     timings["fragility"] = time.perf_counter() - t

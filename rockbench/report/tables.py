@@ -88,6 +88,27 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "in_words": "-, the boundary's shift per pulse, in words"},
     "tradeoff.csv": {"(then)": "every column of rockbench.studies.tradeoff.TABLE_COLUMNS "
                                "(one row per engine and setting the decision's search ran)"},
+    "fragility.csv": {
+        "frame": "-, the frame's label", "scene": "-", "backend": "-, a backend, or 'analytic "
+        "(whole ladder)': the analytic fit over every step", "ensemble": "-, kind: name of the "
+        "records (synthetic, bundled or real)", "intensity": "-, the intensity measure",
+        "unit": "-, its unit", "median": "the IM's unit, lognormal fragility median",
+        "median_low": "the IM's unit, 95 % bootstrap interval, low",
+        "median_high": "the IM's unit, 95 % bootstrap interval, high",
+        "dispersion": "-, lognormal dispersion beta (record to record)",
+        "dispersion_low": "-, its 95 % interval, low", "dispersion_high": "-, high",
+        "dispersion_numerical": "-, beta_num: RMS of ln(1 + e) over the engine's relative peak "
+                                "errors at its setting (docs/fragility.md)",
+        "dispersion_total": "-, sqrt(beta^2 + beta_num^2)",
+        "im_best": "-, the most efficient intensity measure (smallest dispersion)",
+        "runs": "-, runs fitted", "overturned": "-, of them overturned",
+        "not_ok": "-, runs not ok (left out)", "statistic": "-, two-sample KS statistic",
+        "p_value": "-, its smallest p over the steps",
+        "median_difference": "the IM's unit, median - the analytic median",
+        "median_difference_low": "the IM's unit, 95 % interval, low",
+        "median_difference_high": "the IM's unit, 95 % interval, high",
+        "verdict": "-, the engine's verdict against the analytic model, in words",
+        "note": "-, how the fit went, in words"},
     "stress.csv": {"(then)": "every column of rockbench.studies.robustness.STRESS_COLUMNS (one "
                              "row per engine and stability point)"},
     "stress_breaking_points.csv": {

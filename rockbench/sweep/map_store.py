@@ -241,7 +241,9 @@ def _read_part(p: Path) -> pd.DataFrame | str:
         raise
     except Exception as e:  # ArrowInvalid, OSError, ...: truncated, corrupted, empty, foreign
         return f"{type(e).__name__}: {' '.join(str(e).split())[:120]}"
-    missing = [c for c in MAP_COLUMNS if c not in df.columns]
+    # a part written before maps kept CPU time has wall_s instead of cpu_s (tidy_map: NaN)
+    missing = [c for c in MAP_COLUMNS if c not in df.columns
+               and not (c == "cpu_s" and "wall_s" in df.columns)]
     if missing:
         return f"not a map part: no column {', '.join(missing[:3])}"
     try:
