@@ -169,7 +169,7 @@ def test_first_excess_interpolates_and_prefers_the_earlier_contact():
     assert first_excess(d, 0.5, 0.5) == (1.5, "base", 0.7)
     assert first_excess(d, 0.8, 0.1)[:2] == (2.0, "beam")      # opens: the sample itself
     assert first_excess(d.assign(beam=0.0), 0.8) == (2.5, "base", 0.9)
-    assert first_excess(d, 1.0, 1e9) is None
+    assert first_excess(d.assign(beam=0.0), 1.0) is None
 
 
 def test_summary_fields_and_json_carry_the_onset(monkeypatch):
