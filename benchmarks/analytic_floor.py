@@ -111,7 +111,7 @@ def _f(t, phi, shape, scale, per, I, gc, gs, bc, bs):
 def floor_cell(shape, sign, Amp, W, k, alpha, p, thr_p, thr_n, v_rest, v_chat, dt_chat, rtol,
                atol, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, out):
     """One map cell: out = (overturned, max |phi|, impacts, steps)."""
-    mp = np.zeros(5)
+    mp = np.zeros(7)
     n_ext = 3 if shape == 1 else 4
     ext = np.zeros(n_ext)
     extsuf = np.zeros(n_ext)

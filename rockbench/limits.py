@@ -102,6 +102,9 @@ LIMITS: dict[str, Limit] = {lim.key: lim for lim in (
           why="pulse amplitude a_g (1e4 m/s^2 ~ 1000 g)"),
     Limit("period", 1e-4, 1e4, unit="s",
           why="pulse period T_g (a run spans at least the pulse window 6 T_g)"),
+    Limit("vertical_ratio", 0.0, 3.0,
+          why="peak vertical over peak horizontal ground acceleration of a pulse: 0 (none) to "
+              "3; near-fault records reach about 2 (docs/sliding.md)"),
     Limit("record_dt", 1e-4, 0.1, lo_open=True, hi_open=True, unit="s",
           why="time step of a ground-motion record (accelerograms use 0.001-0.02 s)"),
     Limit("record_bytes", None, 1e8, unit="bytes",

@@ -82,6 +82,14 @@ SUMMARY_FIELDS: dict[str, str] = {
     "max_penetration": "m, largest penetration at any contact (engines)",
     "max_sliding": "m, largest tangential slip of a contact point (engines)",
     "contact_opened": "-, a contact the analytic model keeps closed opened (engines)",
+    "sliding_onset": "s, first time a contact of the analytic model needs more friction than "
+                     "the scene's (|T| / N > mu; None when never; analytic)",
+    "sliding_contact": "-, the contact that needs it first: base (the pivots on the ground) or "
+                       "beam (the beam on its columns); None when none (analytic)",
+    "t_lift_off": "s, first time the ground falls faster than gravity (g + a_v <= 0): the "
+                  "structure leaves the ground and the analytic run stops; None when never",
+    "validity": "-, inside | outside the model from t = ... s and why (the analytic model's own "
+                "check, rockbench.validity.run_validity; None: not assessed)",
 }
 
 #: Cost fields: unit and meaning.
@@ -155,6 +163,19 @@ class Summary:
     max_penetration: float | None = None  # m (engines)
     max_sliding: float | None = None      # m (engines)
     contact_opened: bool | None = None    # engines: a contact the analytic model keeps closed opened
+    sliding_onset: float | None = None    # s (analytic): first friction demand above mu
+    sliding_contact: str | None = None    # "base" | "beam" (analytic)
+    t_lift_off: float | None = None       # s: g + a_v <= 0 from here (analytic run stops)
+    validity: str | None = None           # "inside" | "outside the model from t = ...: why"
+
+    @property
+    def t_outside(self) -> float | None:
+        """The time [s] from which the run is outside the model (the earlier of
+        :attr:`sliding_onset` and :attr:`t_lift_off`), None when it stays inside: comparisons
+        with the rocking model hold up to it."""
+        ts = [t for t in (self.sliding_onset, self.t_lift_off)
+              if t is not None and math.isfinite(t)]
+        return min(ts) if ts else None
 
     def to_dict(self) -> dict[str, Any]:
         return jsonable(asdict(self))
@@ -193,6 +214,8 @@ def _short_summary(s: "Summary") -> str:
                                  else "")
     if s.status != "ok" and s.reason:
         text += f" ({s.reason})"
+    if s.validity and s.validity.startswith("outside"):
+        text += f"; {s.validity}"
     return text
 
 
@@ -367,7 +390,9 @@ def motion_label(motion: Mapping[str, Any] | None, *, long: bool = False) -> str
     Short (default): ``"symm+ A=3 W=4"``, ``"anti- a=2.1 m/s2 T=0.8 s"``, ``"LA21 x-1"``,
     ``"free rocking"``. Long: ``"symmetric Ricker pulse, sign +1, A = 3, W = 4 (a_g = 4.2 m/s^2,
     T_g = 1.09 s)"``, ``"record LA21 (scale -1)"``. A and W are a_g / (g tan alpha) and
-    omega_g / p; a_g in m/s^2, T_g in s.
+    omega_g / p; a_g in m/s^2, T_g in s. A vertical component adds ``" V=0.5"`` (short) or
+    ``", vertical part 0.5 x horizontal"`` (long) to a pulse, and its channel's name to a
+    record (``"TCU052-N & TCU052-V"``, ``"record TCU052-N with vertical TCU052-V"``).
     """
     m = dict(motion or {"kind": "none"})
     kind = m.get("kind", "none")
@@ -377,21 +402,31 @@ def motion_label(motion: Mapping[str, Any] | None, *, long: bool = False) -> str
         shape, sign = str(m.get("shape", "symmetric")), int(m.get("sign", 1))
         amp = m.get("amplitude_m_s2", m.get("amplitude"))
         per = m.get("period_s", m.get("period"))
+        vr = as_float(m.get("vertical_ratio", 0.0))
+        vr = vr if math.isfinite(vr) and vr > 0.0 else 0.0
         if not long:
+            vert = f" V={vr:g}" if vr else ""
             if "A" in m and "W" in m:
-                return f"{shape[:4]}{'+' if sign > 0 else '-'} A={m['A']:g} W={m['W']:g}"
-            return f"{shape[:4]}{'+' if sign > 0 else '-'} a={_g4(amp)} m/s2 T={_g4(per)} s"
+                return f"{shape[:4]}{'+' if sign > 0 else '-'} A={m['A']:g} W={m['W']:g}{vert}"
+            return (f"{shape[:4]}{'+' if sign > 0 else '-'} a={_g4(amp)} m/s2 T={_g4(per)} s"
+                    f"{vert}")
         text = f"{shape} Ricker pulse, sign {sign:+d}"
         if "A" in m and "W" in m:
             text += f", A = {m['A']:g}, W = {m['W']:g}"
         if amp is not None and per is not None:
             text += f" (a_g = {_g4(amp)} m/s^2, T_g = {_g4(per)} s)"
+        if vr:
+            text += f", vertical part {vr:g} x horizontal"
         return text
     if kind == "record":
         name = m.get("name") or (str(m.get("path", "")).replace("\\", "/").rsplit("/", 1)[-1]
                                  .rsplit(".", 1)[0]) or "record"
         scale = float(m.get("scale", 1.0) or 1.0)
+        vname = m.get("vertical_name") or (
+            str(m.get("vertical_path", "")).replace("\\", "/").rsplit("/", 1)[-1]
+            .rsplit(".", 1)[0])
         if long:
-            return f"record {name}" + (f" (scale {scale:g})" if scale != 1.0 else "")
-        return name + (f" x{scale:g}" if scale != 1.0 else "")
+            return (f"record {name}" + (f" with vertical {vname}" if vname else "")
+                    + (f" (scale {scale:g})" if scale != 1.0 else ""))
+        return name + (f" & {vname}" if vname else "") + (f" x{scale:g}" if scale != 1.0 else "")
     return str(kind)

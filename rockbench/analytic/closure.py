@@ -16,23 +16,25 @@ from typing import Callable
 
 import numpy as np
 
-from .kernels import NUMBA_AVAILABLE, _acc, _phidd, njit
+from .kernels import NUMBA_AVAILABLE, _acc_hv, _phidd, njit
 
 __all__ = ["closure_function"]
 
 
 @njit(cache=True)
 def _rk4(tt, y0, y1, h, g, intact, mk, mp, rt, ra, hint, kin):
-    a1 = _phidd(y0, y1, _acc(tt, mk, mp, rt, ra, hint), g, intact, kin)
+    ag0, av0 = _acc_hv(tt, mk, mp, rt, ra, hint)
+    a1 = _phidd(y0, y1, ag0, 9.81 + av0, g, intact, kin)
     k1p, k1v = y1, a1
     tm = tt + h / 2
-    agm = _acc(tm, mk, mp, rt, ra, hint)
+    agm, avm = _acc_hv(tm, mk, mp, rt, ra, hint)
     k2p = y1 + h / 2 * k1v
-    k2v = _phidd(y0 + h / 2 * k1p, y1 + h / 2 * k1v, agm, g, intact, kin)
+    k2v = _phidd(y0 + h / 2 * k1p, y1 + h / 2 * k1v, agm, 9.81 + avm, g, intact, kin)
     k3p = y1 + h / 2 * k2v
-    k3v = _phidd(y0 + h / 2 * k2p, y1 + h / 2 * k2v, agm, g, intact, kin)
+    k3v = _phidd(y0 + h / 2 * k2p, y1 + h / 2 * k2v, agm, 9.81 + avm, g, intact, kin)
     k4p = y1 + h * k3v
-    k4v = _phidd(y0 + h * k3p, y1 + h * k3v, _acc(tt + h, mk, mp, rt, ra, hint), g, intact, kin)
+    ag1, av1 = _acc_hv(tt + h, mk, mp, rt, ra, hint)
+    k4v = _phidd(y0 + h * k3p, y1 + h * k3v, ag1, 9.81 + av1, g, intact, kin)
     return (y0 + h / 6 * (k1p + 2 * k2p + 2 * k3p + k4p),
             y1 + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v))
 

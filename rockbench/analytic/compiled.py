@@ -75,6 +75,7 @@ from ..scene.motion import Record, RickerPulse
 from ..scene.scene import Scene
 from ..scene.structure import Frame
 from . import rules
+from ..validity import lift_off_time
 from .reference import Reference, reference_of
 
 __all__ = ["NUMBA_AVAILABLE", "NUMBA_ERROR", "simulate_compiled", "run_pulse_grid",
@@ -260,24 +261,39 @@ def _reason(code: int, out: np.ndarray, rp: np.ndarray, t_end: float) -> str | N
 
 def _motion_arrays(mot) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                  np.ndarray, np.ndarray]:
-    """(kind, mp, record t, record a, extrema, extrema suffix max, record suffix max)."""
+    """(kind, mp, record t, record a, extrema, extrema suffix max, record suffix max).
+
+    ``mp``: scale [m/s^2], period [s], t_start, t_end [s], x factor of Eq. 30, and the vertical
+    part: mp[5] its kind (0 none, 1 a pulse's: the same wavelet times mp[6], the vertical
+    pulse's own scale [m/s^2]; 2 a record's channel) (:func:`kernels._acc_hv`). A record's
+    vertical channel, sampled at its times (:meth:`Record.with_vertical`), follows its
+    horizontal samples in ``ra`` (length 2 n) and its suffix maxima follow theirs in the last
+    array (length 2 n)."""
     empty = np.zeros(1)
-    mp = np.zeros(5)
+    mp = np.zeros(7)
     mp[4] = _XFAC
     if mot is None:
         return _M_NONE, mp, empty, empty, empty[:0], empty[:0], empty
+    vert = getattr(mot, "vertical", None)
     if isinstance(mot, RickerPulse):
         kind = _M_SYM if mot.shape == "symmetric" else _M_ANTI
         mp[0], mp[1] = mot._scale, mot.period
         mp[2], mp[3] = mot.t_start, mot.t_end
+        if vert is not None:
+            mp[5], mp[6] = 1.0, vert._scale
         ext = np.ascontiguousarray(mot._extrema, dtype=float)
         suf = np.ascontiguousarray(mot._extrema_sufmax, dtype=float)
         return kind, mp, empty, empty, ext, suf, empty
     if isinstance(mot, Record):
         rt = np.array(mot.time, dtype=float)          # writable copies: one compiled type
         ra = np.array(mot.samples, dtype=float)
+        rsuf = np.array(mot._sufmax, dtype=float)
         mp[2], mp[3] = mot.t_start, mot.t_end
-        return _M_REC, mp, rt, ra, empty[:0], empty[:0], np.array(mot._sufmax, dtype=float)
+        if vert is not None:
+            mp[5] = 2.0
+            ra = np.concatenate([ra, np.asarray(vert.samples, dtype=float)])
+            rsuf = np.concatenate([rsuf, np.asarray(vert._sufmax, dtype=float)])
+        return _M_REC, mp, rt, ra, empty[:0], empty[:0], rsuf
     raise ParameterError("motion", type(mot).__name__,
                          "a RickerPulse, a Record or None for the compiled analytic path")
 
@@ -322,6 +338,10 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
     if motion is None and phi0 == 0.0 and phidot0 == 0.0:
         raise ParameterError("phi0", phi0, "non-zero for a free-rocking run (no ground motion)")
     t_end = t0 + duration
+    # the ground falls faster than gravity: the model (and the run) ends there (solver.py)
+    t_lift = lift_off_time(motion, t0, t_end) if motion is not None else None
+    if t_lift is not None:
+        t_end = t_lift
     v_rest = settings.rest_ratio * ref.p * ref.alpha
     thr_p, thr_n = _thresholds(sc)
     rp = _rule_params(sc)
@@ -377,6 +397,9 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
         n_impacts=int(out[_O_NIMP]), fractured=bool(out[_O_FRAC]),
         t_fracture=float(out[_O_TFRAC]) if out[_O_FRAC] else None,
         status="ok" if status == 0 else "invalid", reason=reason)
+    from .solver import finish_validity
+    finish_validity(summary, ref, motion, history,
+                    t_lift if t_lift is not None and t_fin >= t_lift else None)
     cost = Cost(wall_s=wall, sim_time=t_fin - t0, steps=int(out[_O_STEPS]),
                 rhs_calls=int(out[_O_NFEV]))
     sdict = asdict(settings)

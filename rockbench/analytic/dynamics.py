@@ -14,6 +14,12 @@ With T = 1/2 I(phi) phi'^2 and the bodies' centres of mass G_i(phi), rotations t
 
 These are compared with the paper's closed forms (Eq. 18) in the tests; the differences are
 listed in ``docs/paper-discrepancies.md``.
+
+Vertical ground acceleration a_v(t) [m/s^2, up positive]: while the pivots stay on the ground,
+g is replaced by g + a_v in the gravity term, G (g + a_v) (derivation:
+:mod:`rockbench.analytic.reactions`). The devices' terms K and D do not change: the tendons'
+elongations and the dampers' chords depend on the bodies' rotations relative to the
+foundation only, not on gravity or on the foundation's motion.
 """
 
 from __future__ import annotations
@@ -139,11 +145,12 @@ class Dynamics:
         return Terms(I, J, Gm, Bm, K, D)
 
     def acceleration(self, phi: float, phidot: float, ground_acc: float,
-                     devices_intact: bool = True) -> float:
-        """phi'' [rad/s^2] from Eq. 17 for ground acceleration ``ground_acc`` [m/s^2]."""
+                     devices_intact: bool = True, vertical_acc: float = 0.0) -> float:
+        """phi'' [rad/s^2] from Eq. 17 for the horizontal ground acceleration ``ground_acc``
+        [m/s^2] and the vertical one ``vertical_acc`` [m/s^2, up positive; g -> g + a_v]."""
         t = self.terms(phi, devices_intact)
-        return (t.ground * ground_acc - t.velocity * phidot * phidot - t.gravity * G
-                - t.tendon - t.damping * phidot) / t.inertia
+        return (t.ground * ground_acc - t.velocity * phidot * phidot
+                - t.gravity * (G + vertical_acc) - t.tendon - t.damping * phidot) / t.inertia
 
     def potential_gradient(self, phi: float, devices_intact: bool = True) -> float:
         """dV/dphi = G g + K [N m]: gravity plus intact tendons."""

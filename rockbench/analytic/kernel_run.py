@@ -9,40 +9,45 @@ import numpy as np
 
 from ..constants import FREE_TAIL
 from .kernels import numba, njit, prange  # noqa: F401
-from .kernels import (_NOUT, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _acc, _brent_core, _dense_eval, _fill_hist, _max_abs_after, _next_uplift, _phidd, _push_event, _rms2, _tabulated)
+from .kernels import (_NOUT, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _acc, _acc_hv, _brent_core, _dense_eval, _fill_hist, _max_abs_after, _max_abs_v_after, _next_uplift, _phidd, _push_event, _rms2, _tabulated)
 
 
 @njit(cache=True)
 def _f_general(t, y0, y1, mk, mp, rt, ra, hint, g, intact, kin):
-    """kernels._phidd of kernels._acc: any mechanism, any motion (a call, not inlined, so that
-    the step loop of a block under a pulse stays small)."""
-    return _phidd(y0, y1, _acc(t, mk, mp, rt, ra, hint), g, intact, kin)
+    """kernels._phidd of kernels._acc_hv (g + a_v with vertical motion): any mechanism, any
+    motion (a call, not inlined, so that the step loop of a block under a pulse stays small)."""
+    ag, av = _acc_hv(t, mk, mp, rt, ra, hint)
+    return _phidd(y0, y1, ag, 9.81 + av, g, intact, kin)
 
 
 @njit(cache=True, inline="always")
-def _f(t, y0, y1, form, P, Q, I0, mk, scale, per, xfac, g, intact, dev, kin, mp, rt, ra, hint):
+def _f(t, y0, y1, form, P, Q, I0, mk, scale, vscale, per, xfac, g, intact, dev, kin, mp, rt,
+       ra, hint):
     """phi'' at (t, phi = y0, phi' = y1): kernels._phidd of kernels._acc, in one of three forms
     chosen per segment (:func:`_form`). 2: a parallelogram frame without devices acting, under a
     Ricker pulse (``mk`` 1 or 2), in its block form with P, Q, I0 = g[40], g[41], g[42];
     3: a tabulated frame under a Ricker pulse, from its table, NaN beyond the table (the caller
     then redoes the step with form 0); 0: anything, by a call of :func:`_f_general`. The pulse
-    is evaluated with scale, per, xfac = mp[0], mp[1], mp[4]. Forms 2 and 3 do the operations
-    of _phidd and _acc in the same order: the same numbers to the last bit."""
+    is evaluated with scale, per, xfac = mp[0], mp[1], mp[4], its vertical part with vscale =
+    mp[6] (0 without one: g + a_v = 9.81 exactly). Forms 2 and 3 do the operations of _phidd
+    and _acc_hv in the same order: the same numbers to the last bit."""
     if form == 2 or form == 3:
         if mk == 1:
             tau = t / per
             u = 9.869604401089358 * tau * tau
-            ag = scale * ((1.0 - 2.0 * u) * math.exp(-u))
+            w = (1.0 - 2.0 * u) * math.exp(-u)
         else:
             x = xfac * (t / per)
-            ag = scale * ((x * x - 3.0) * x * math.exp(-0.5 * x * x))
+            w = (x * x - 3.0) * x * math.exp(-0.5 * x * x)
+        ag = scale * w
+        ge = 9.81 + vscale * w
         if form == 2:
             c = math.cos(y0)
             s = math.sin(y0)
-            return ((Q * c + P * s) * ag - (P * c - Q * s) * 9.81) / I0
+            return ((Q * c + P * s) * ag - (P * c - Q * s) * ge) / I0
         u = g[44] * y0
         if g[45] <= u <= g[46]:
-            return _tabulated(u, y1, ag, g, dev)
+            return _tabulated(u, y1, ag, ge, g, dev)
         return np.nan
     return _f_general(t, y0, y1, mk, mp, rt, ra, hint, g, intact, kin)
 
@@ -71,6 +76,7 @@ def _attempt(form, t, h, ya0, ya1, f0, f1, K, A, B, C, E3, E5, rtol, atol, mk, g
     Q = g[41]
     I0 = g[42]
     scale = mp[0]
+    vscale = mp[6]
     per = mp[1]
     xfac = mp[4]
     K[0, 0] = f0
@@ -83,8 +89,8 @@ def _attempt(form, t, h, ya0, ya1, f0, f1, K, A, B, C, E3, E5, rtol, atol, mk, g
             dy1 += K[j, 1] * A[st, j]
         q1 = ya1 + dy1 * h
         K[st, 0] = q1
-        K[st, 1] = _f(t + C[st] * h, ya0 + dy0 * h, q1, form, P, Q, I0, mk, scale, per, xfac,
-                      g, intact, dev, kin, mp, rt, ra, hint)
+        K[st, 1] = _f(t + C[st] * h, ya0 + dy0 * h, q1, form, P, Q, I0, mk, scale, vscale, per,
+                      xfac, g, intact, dev, kin, mp, rt, ra, hint)
     s0b = 0.0
     s1b = 0.0
     for j in range(ns):
@@ -92,8 +98,8 @@ def _attempt(form, t, h, ya0, ya1, f0, f1, K, A, B, C, E3, E5, rtol, atol, mk, g
         s1b += K[j, 1] * B[j]
     n0 = ya0 + h * s0b
     n1 = ya1 + h * s1b
-    fn1 = _f(t + h, n0, n1, form, P, Q, I0, mk, scale, per, xfac, g, intact, dev, kin, mp, rt,
-             ra, hint)
+    fn1 = _f(t + h, n0, n1, form, P, Q, I0, mk, scale, vscale, per, xfac, g, intact, dev, kin,
+             mp, rt, ra, hint)
     K[ns, 0] = n1
     K[ns, 1] = fn1
     sc0 = atol + max(abs(ya0), abs(n0)) * rtol
@@ -130,6 +136,7 @@ def _extra_stages(form, t, h, ya0, ya1, K, A, C, ns, mk, g, intact, dev, kin, mp
     Q = g[41]
     I0 = g[42]
     scale = mp[0]
+    vscale = mp[6]
     per = mp[1]
     xfac = mp[4]
     ok = True
@@ -141,8 +148,8 @@ def _extra_stages(form, t, h, ya0, ya1, K, A, C, ns, mk, g, intact, dev, kin, mp
             dy1 += K[j, 1] * A[st, j]
         q1 = ya1 + dy1 * h
         K[st, 0] = q1
-        K[st, 1] = _f(t + C[st] * h, ya0 + dy0 * h, q1, form, P, Q, I0, mk, scale, per, xfac, g,
-                      intact, dev, kin, mp, rt, ra, hint)
+        K[st, 1] = _f(t + C[st] * h, ya0 + dy0 * h, q1, form, P, Q, I0, mk, scale, vscale, per,
+                      xfac, g, intact, dev, kin, mp, rt, ra, hint)
         if not (K[st, 1] == K[st, 1]):
             ok = False
     return ok
@@ -164,7 +171,8 @@ def _initial_step(t, ya0, ya1, f0, f1, interval, rtol, atol, mk, mp, rt, ra, hin
     y1a = ya0 + h0 * f0
     y1b = ya1 + h0 * f1
     fb0 = y1b
-    fb1 = _phidd(y1a, y1b, _acc(t + h0, mk, mp, rt, ra, hint), g, intact, kin)
+    agh, avh = _acc_hv(t + h0, mk, mp, rt, ra, hint)
+    fb1 = _phidd(y1a, y1b, agh, 9.81 + avh, g, intact, kin)
     d2 = _rms2(fb0 - f0, fb1 - f1, s0, s1) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -239,7 +247,10 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
         if mode == 0:
             # the motion can no longer exceed either threshold: same outcome as a scan that
             # finds no uplift before t_end (GroundMotion.max_abs_after), at no cost
-            if _max_abs_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint) <= min(thr_p, -thr_n):
+            # (vertical motion: |u_g''| <= |lambda| g (1 - sup |a_v| / g) everywhere later)
+            vfac = 1.0 - _max_abs_v_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint) / 9.81
+            if _max_abs_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint) <= \
+                    min(thr_p, -thr_n) * vfac:
                 tu, s = np.nan, 0
             else:
                 tu, s = _next_uplift(t, t_end, mk, mp, rt, ra, hint, ext, thr_p, thr_n)
@@ -572,7 +583,8 @@ def _run(geo, sc, mk, mp, rt, ra, ext, extsuf, rsuf, t0, t_end, phi0, phid0, rto
 @njit(cache=True)
 def _pulse_setup(shape, sign, A, W, alpha, p, sym_ext, anti_ext, beta, xfac, mp, ext, extsuf):
     """RickerPulse.dimensionless in compiled code: fills mp (scale, period, t_start, t_end,
-    xfac), the extrema and their suffix maxima; returns the number of extrema."""
+    xfac; mp[5] = mp[6] = 0: no vertical part), the extrema and their suffix maxima; returns
+    the number of extrema."""
     amp = A * 9.81 * math.tan(alpha)
     per = 2.0 * math.pi / (W * p)
     if shape == 1:
@@ -602,7 +614,7 @@ def _pulse_setup(shape, sign, A, W, alpha, p, sym_ext, anti_ext, beta, xfac, mp,
 @njit(cache=True)
 def _grid_cell(i, geo, sc, shapes, signs, As, Ws, duration, rtol, atol, v_rest, thr_p, thr_n,
                rp, A, B, C, E3, E5, Dd, ns, sym_ext, anti_ext, beta, xfac, res):
-    mp = np.zeros(5)
+    mp = np.zeros(7)
     shape = shapes[i]
     n_ext = 3 if shape == 1 else 4
     ext = np.zeros(n_ext)

@@ -217,12 +217,12 @@ def _estrin11(g, b, x, x2, x4, x8):
 
 
 @njit(cache=True, inline="always")
-def _tabulated(u, pd, ag, g, dev):
+def _tabulated(u, pd, ag, ge, g, dev):
     """phi'' from the tabulated terms of a frame (``g[0] == 3``, compiled.scene_arrays):
     u = s phi in [g[45], g[46]] split into g[48] equal intervals of width g[47] (g[43] =
     1 / g[47]), each with polynomials of degree 11 (g[49]) in the interval's local coordinate
     x in [-1, 1] for I, J, G, B, sum e de/dphi and sum (dc/dphi)^2 (coefficients from g[_TAB0],
-    highest degree first)."""
+    highest degree first). ``ge`` = g + a_v [m/s^2]."""
     du = g[47]
     n = int(g[48])
     i = int((u - g[45]) * g[43])          # g[43] = 1 / du: no division on the way to x
@@ -245,12 +245,13 @@ def _tabulated(u, pd, ag, g, dev):
     if dev:
         K = g[27] * _estrin11(g, base + 48, x, x2, x4, x8)
         D = g[28] * _estrin11(g, base + 60, x, x2, x4, x8)
-    return (vB * ag - vJ * pd * pd - vG * 9.81 - K - D * pd) / vI
+    return (vB * ag - vJ * pd * pd - vG * ge - K - D * pd) / vI
 
 
 @njit(cache=True, inline="always")
-def _phidd(phi, pd, ag, g, intact, kin):
-    """phi'' [rad/s^2] of Eq. 17 (Dynamics.acceleration).
+def _phidd(phi, pd, ag, ge, g, intact, kin):
+    """phi'' [rad/s^2] of Eq. 17 (Dynamics.acceleration) for the ground accelerations ``ag``
+    [m/s^2] and ``ge`` = g + a_v [m/s^2] (9.81 + 0.0 = 9.81 exactly without vertical motion).
 
     A parallelogram frame (``g[0] == 2``) is a Housner block exactly: I is constant (g[42]),
     J = 0, G(phi) = P cos(phi) - Q sin(phi) and B(phi) = Q cos(phi) + P sin(phi) with P = sum
@@ -275,11 +276,11 @@ def _phidd(phi, pd, ag, g, intact, kin):
             el, er, dl, dr, cl, cr = _devices(kin, g[26])
             K = g[27] * (el * dl + er * dr)
             D = g[28] * (cl * cl + cr * cr)
-        return ((Q * c + P * s) * ag - (P * c - Q * s) * 9.81 - K - D * pd) / g[42]
+        return ((Q * c + P * s) * ag - (P * c - Q * s) * ge - K - D * pd) / g[42]
     if g[0] == 3.0:
         u = g[44] * phi
         if g[45] <= u <= g[46]:
-            return _tabulated(u, pd, ag, g, dev)
+            return _tabulated(u, pd, ag, ge, g, dev)
     nb = _kinematics(phi, g, kin, dev)
     if nb < 0:
         return np.nan
@@ -304,7 +305,7 @@ def _phidd(phi, pd, ag, g, intact, kin):
         el, er, dl, dr, cl, cr = _devices(kin, g[26])
         K = k * (el * dl + er * dr)
         D = c * (cl * cl + cr * cr)
-    return (Bm * ag - J * pd * pd - Gm * 9.81 - K - D * pd) / In
+    return (Bm * ag - J * pd * pd - Gm * ge - K - D * pd) / In
 
 
 @njit(cache=True, inline="always")
@@ -335,6 +336,56 @@ def _acc(t, mk, mp, rt, ra, hint):
     return 0.0
 
 
+@njit(cache=True, inline="always")
+def _acc_hv(t, mk, mp, rt, ra, hint):
+    """(u_g'', a_v) [m/s^2] at t: the horizontal acceleration as :func:`_acc` (the same
+    operations, the same bits) and the vertical one by ``mp[5]``: 0 none (0.0), 1 a pulse's
+    vertical part, the wavelet times mp[6] (RickerPulse.vertical: its own scale), 2 a record's
+    vertical channel, ``ra[n:2n]`` on the times ``rt`` (n = rt.shape[0]; compiled._motion_arrays)."""
+    vk = mp[5]
+    if vk == 0.0:
+        return _acc(t, mk, mp, rt, ra, hint), 0.0
+    if mk == 1:
+        tau = t / mp[1]
+        u = 9.869604401089358 * tau * tau
+        w = (1.0 - 2.0 * u) * math.exp(-u)
+        return mp[0] * w, mp[6] * w
+    if mk == 2:
+        x = mp[4] * (t / mp[1])
+        w = (x * x - 3.0) * x * math.exp(-0.5 * x * x)
+        return mp[0] * w, mp[6] * w
+    if mk == 3:
+        n = rt.shape[0]
+        if not (rt[0] <= t <= rt[n - 1]):
+            return 0.0, 0.0
+        a = _acc(t, mk, mp, rt, ra, hint)       # leaves the interval's index in hint[0]
+        i = hint[0]
+        if not (0 <= i < n - 1 and rt[i] <= t <= rt[i + 1]):
+            i = np.searchsorted(rt, t, side="right") - 1
+        if i >= n - 1:
+            return a, ra[2 * n - 1]
+        w = (t - rt[i]) / (rt[i + 1] - rt[i])
+        return a, (1.0 - w) * ra[n + i] + w * ra[n + i + 1]
+    return 0.0, 0.0
+
+
+@njit(cache=True)
+def _max_abs_v_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint):
+    """sup |a_v| over [t, inf) [m/s^2] (0 without vertical motion): a pulse's vertical part is
+    |mp[6] / mp[0]| times its horizontal one; a record's channel has its suffix maxima in
+    ``rsuf[n:2n]``."""
+    vk = mp[5]
+    if vk == 0.0:
+        return 0.0
+    if vk == 1.0:
+        return abs(mp[6] / mp[0]) * _max_abs_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint)
+    n = rt.shape[0]
+    a = abs(_acc_hv(t, mk, mp, rt, ra, hint)[1])
+    i = np.searchsorted(rt, t, side="right")
+    later = rsuf[n + i] if i < n else 0.0
+    return max(later, a)
+
+
 @njit(cache=True)
 def _max_abs_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint):
     """sup |u_g''| over [t, inf) (GroundMotion.max_abs_after)."""
@@ -346,7 +397,7 @@ def _max_abs_after(t, mk, mp, rt, ra, ext, extsuf, rsuf, hint):
             later = extsuf[i]
     elif mk == 3:
         i = np.searchsorted(rt, t, side="right")
-        if i < rsuf.shape[0]:
+        if i < rt.shape[0]:          # rsuf[n:] holds a vertical channel's (_max_abs_v_after)
             later = rsuf[i]
     return max(later, a)
 
@@ -360,12 +411,20 @@ def _updir(a, thr_p, thr_n):
     return 0
 
 
+@njit(cache=True, inline="always")
+def _excess(t, thr, mk, mp, rt, ra, hint):
+    """u_g''(t) - thr (1 + a_v(t) / g) [m/s^2]: the uplift condition's excess over a threshold
+    ``thr`` = lambda g (1 + UPLIFT_RTOL) (exactly u_g'' - thr without vertical motion)."""
+    a, v = _acc_hv(t, mk, mp, rt, ra, hint)
+    return a - thr * (1.0 + v / 9.81)
+
+
 @njit(cache=True)
 def _brent_acc(lo, hi, thr, mk, mp, rt, ra, hint, xtol, rtol):
-    """Root of acc(t) - thr in [lo, hi] (sign change assumed) by Brent's method."""
+    """Root of :func:`_excess` in [lo, hi] (sign change assumed) by Brent's method."""
     a, b = lo, hi
-    fa = _acc(a, mk, mp, rt, ra, hint) - thr
-    fb = _acc(b, mk, mp, rt, ra, hint) - thr
+    fa = _excess(a, thr, mk, mp, rt, ra, hint)
+    fb = _excess(b, thr, mk, mp, rt, ra, hint)
     return _brent_core(a, b, fa, fb, xtol, rtol, 0, mk, mp, rt, ra, hint,
                        np.zeros((1, 1)), 0.0, 1.0, np.zeros(2), 0, thr, 1.0)
 
@@ -388,7 +447,7 @@ def _dense_eval(F, yold, t_old, h, t, comp):
 @njit(cache=True)
 def _fval(kind, t, mk, mp, rt, ra, hint, F, t_old, h, yold, comp, shift, mul):
     if kind == 0:
-        return _acc(t, mk, mp, rt, ra, hint) - shift
+        return _excess(t, shift, mk, mp, rt, ra, hint)
     return mul * _dense_eval(F, yold, t_old, h, t, comp) - shift
 
 
@@ -450,9 +509,18 @@ def _brent_core(xa, xb, fa, fb, xtol, rtol, kind, mk, mp, rt, ra, hint, F, t_old
 
 
 @njit(cache=True)
+def _updir_at(t, mk, mp, rt, ra, hint, thr_p, thr_n):
+    """:func:`_updir` at time t with the thresholds times (g + a_v) / g."""
+    a, v = _acc_hv(t, mk, mp, rt, ra, hint)
+    f = 1.0 + v / 9.81
+    return _updir(a, thr_p * f, thr_n * f)
+
+
+@njit(cache=True)
 def _next_uplift(ta, tb, mk, mp, rt, ra, hint, ext, thr_p, thr_n):
-    """First uplift time in [ta, tb] and its direction, (nan, 0) if none (solver.next_uplift)."""
-    s = _updir(_acc(ta, mk, mp, rt, ra, hint), thr_p, thr_n)
+    """First uplift time in [ta, tb] and its direction, (nan, 0) if none (solver.next_uplift);
+    the thresholds scale with (g + a_v) / g (vertical motion)."""
+    s = _updir_at(ta, mk, mp, rt, ra, hint, thr_p, thr_n)
     if s != 0:
         return ta, s
     if mk == 0 or tb <= ta:
@@ -468,8 +536,7 @@ def _next_uplift(ta, tb, mk, mp, rt, ra, hint, ext, thr_p, thr_n):
                 hi = rt[i]
             else:
                 hi = tb
-            a = _acc(hi, mk, mp, rt, ra, hint)
-            d = _updir(a, thr_p, thr_n)
+            d = _updir_at(hi, mk, mp, rt, ra, hint, thr_p, thr_n)
             if d != 0:
                 found = d
                 break
@@ -494,8 +561,7 @@ def _next_uplift(ta, tb, mk, mp, rt, ra, hint, ext, thr_p, thr_n):
                 if e < ne and ext[e] == tg:
                     e += 1
                 j += 1
-            a = _acc(hi, mk, mp, rt, ra, hint)
-            d = _updir(a, thr_p, thr_n)
+            d = _updir_at(hi, mk, mp, rt, ra, hint, thr_p, thr_n)
             if d != 0:
                 found = d
                 break
@@ -505,16 +571,22 @@ def _next_uplift(ta, tb, mk, mp, rt, ra, hint, ext, thr_p, thr_n):
     if found == 0:
         return np.nan, 0
     thr = thr_p if found == 1 else thr_n
-    if mk == 3:
+    if mk == 3 and mp[5] == 0.0:
         alo = _acc(lo, mk, mp, rt, ra, hint)
         ahi = _acc(hi, mk, mp, rt, ra, hint)
         tu = lo + (thr - alo) * (hi - lo) / (ahi - alo)
+        tu = min(max(tu, lo), hi)
+    elif mk == 3:
+        # with a vertical channel on the same samples the excess is linear between them too
+        elo = _excess(lo, thr, mk, mp, rt, ra, hint)
+        ehi = _excess(hi, thr, mk, mp, rt, ra, hint)
+        tu = lo - elo * (hi - lo) / (ehi - elo)
         tu = min(max(tu, lo), hi)
     else:
         tu = _brent_acc(lo, hi, thr, mk, mp, rt, ra, hint, 1e-13, 1e-14)
     # step just past the root so that the excess is strictly positive (doubling steps)
     step = 1e-13 * max(1.0, abs(tu))
-    while tu < hi and not (found * (_acc(tu, mk, mp, rt, ra, hint) - thr) > 0.0):
+    while tu < hi and not (found * _excess(tu, thr, mk, mp, rt, ra, hint) > 0.0):
         tu = min(hi, tu + step)
         step *= 2.0
     return tu, found

@@ -54,6 +54,21 @@ soffit (rotated by the beam's rotation) for B and C. ``normal`` > 0 is compressi
 <= 0 means the contact would open (a pivot lifts, the beam leaves a column), and the friction
 demand is then infinite. Devices (tendons, dampers) are not included: their forces act across
 the same joints and would change these loads.
+
+Along a run: the demand history
+-------------------------------
+:func:`demand_history` evaluates the demand at every output sample of a run of the model
+(vectorized: one batched linear solve), for the two kinds of contact the model keeps: the
+**base** (the pivots on the ground: the block's pivot, the frame's A and D; the larger
+demand) and, for a frame, the **beam** on its columns (B and C; the larger). At rest (mode 0)
+the structure moves with the ground as one rigid body, and every contact's total force is
+m (a_g, g + a_v): the demand is |a_g| / (g + a_v) at the base and under the beam alike (the
+split between two contacts at rest is statically indeterminate; they slide together). While a
+hybrid frame rocks with its devices intact the demand is not computed (NaN): how the
+tendons' and dampers' forces reach the contacts is not part of the SDOF model (the engines'
+:class:`~rockbench.engines.devices.DeviceGeometry` offers three damper models with different
+contact loads); at rest the devices are slack (no pretension) and the demand is exact.
+:func:`first_excess` finds the first time a demand exceeds its friction.
 """
 
 from __future__ import annotations
@@ -72,7 +87,8 @@ from . import rules
 from .dynamics import Dynamics
 
 __all__ = ["Contact", "BlockReactions", "FrameReactions", "rocking_acceleration",
-           "uplift_direction", "block_reactions", "frame_reactions", "reaction_history"]
+           "uplift_direction", "block_reactions", "frame_reactions", "reaction_history",
+           "demand_history", "first_excess"]
 
 
 @dataclass(frozen=True)
@@ -299,3 +315,147 @@ def reaction_history(structure: Block | Frame, direction: int, phi, phidot, phid
                         f"demand_{name}": c.demand})
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+# ------------------------------------------------------------------------------------------------
+# Along a run: the demand at every output sample, vectorized
+def _solve_many(bodies, joints, phidot, a_g, ge):
+    """:func:`_solve` over n samples at once (phi'' the ninth unknown: the model's): ``bodies``
+    = [(m, I, k)] with k a dict of arrays (n,) x, y, dx, dy, ddx, ddy, dtheta, ddtheta;
+    ``joints`` = [(px (n,), py (n,), [(body, sign)])]. Returns the joint forces (n, nj, 2)."""
+    nb, nj, n = len(bodies), len(joints), phidot.size
+    M = np.zeros((n, 3 * nb, 2 * nj + 1))
+    rhs = np.zeros((n, 3 * nb))
+    w2 = phidot * phidot
+    for i, (m, inertia, k) in enumerate(bodies):
+        r = 3 * i
+        rhs[:, r] = m * (k["ddx"] * w2 + a_g)
+        rhs[:, r + 1] = m * (k["ddy"] * w2 + ge)
+        rhs[:, r + 2] = inertia * k["ddtheta"] * w2
+        M[:, r, -1] = -m * k["dx"]
+        M[:, r + 1, -1] = -m * k["dy"]
+        M[:, r + 2, -1] = -inertia * k["dtheta"]
+    for j, (px, py, acting) in enumerate(joints):
+        for i, sign in acting:
+            k = bodies[i][2]
+            r = 3 * i
+            M[:, r, 2 * j] += sign
+            M[:, r + 1, 2 * j + 1] += sign
+            M[:, r + 2, 2 * j] += -sign * (py - k["y"])
+            M[:, r + 2, 2 * j + 1] += sign * (px - k["x"])
+    x = np.linalg.solve(M, rhs[..., None])[..., 0]
+    return x[:, :-1].reshape(n, nj, 2)
+
+
+def _demand_many(forces, surface):
+    """max |T| / N over the contacts ``forces`` (n, k, 2) on surfaces rotated by ``surface``
+    ((n, k) [rad]); inf where a contact opens (N <= 0)."""
+    tx, ty = np.cos(surface), np.sin(surface)
+    fx, fy = forces[..., 0], forces[..., 1]
+    normal = -ty * fx + tx * fy
+    tang = tx * fx + ty * fy
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = np.where(normal > 0.0, np.abs(tang) / np.where(normal > 0.0, normal, 1.0), np.inf)
+    return d.max(axis=1)
+
+
+def _rocking_demand(structure, s, phi, phidot, a_g, ge):
+    """(base, beam) demands [-] of ``structure`` rocking in direction ``s`` at the samples."""
+    mech = _dynamics(structure, s).mechanism
+    kin = mech.configuration_many(phi)
+    n = phi.size
+    if isinstance(structure, Block):
+        (k,) = kin
+        px, py = mech.pivot
+        f = _solve_many([(structure.mass, structure.inertia_cm, k)],
+                        [(np.full(n, px), np.full(n, py), [(0, 1.0)])], phidot, a_g, ge)
+        return _demand_many(f, np.zeros((n, 1))), np.full(n, np.nan)
+    left, beam, right = kin
+    piv = structure.pivots(s)
+    A, D = piv["A"], piv["D"]
+    c0, s0 = np.cos(phi), np.sin(phi)
+    bx0, by0 = piv["B"][0] - A[0], piv["B"][1] - A[1]
+    cth, sth = np.cos(right["theta"]), np.sin(right["theta"])
+    cx0, cy0 = piv["C"][0] - D[0], piv["C"][1] - D[1]
+    B = (A[0] + c0 * bx0 - s0 * by0, A[1] + s0 * bx0 + c0 * by0)
+    C = (D[0] + cth * cx0 - sth * cy0, D[1] + sth * cx0 + cth * cy0)
+    bodies = [(structure.mass_left, structure.inertia_left, left),
+              (structure.mass_beam, structure.inertia_beam, beam),
+              (structure.mass_right, structure.inertia_right, right)]
+    joints = [(np.full(n, A[0]), np.full(n, A[1]), [(0, 1.0)]),
+              (B[0], B[1], [(1, 1.0), (0, -1.0)]), (C[0], C[1], [(1, 1.0), (2, -1.0)]),
+              (np.full(n, D[0]), np.full(n, D[1]), [(2, 1.0)])]
+    f = _solve_many(bodies, joints, phidot, a_g, ge)
+    base = _demand_many(f[:, [0, 3]], np.zeros((n, 2)))
+    th_b = np.repeat(beam["theta"][:, None], 2, axis=1)
+    return base, _demand_many(f[:, [1, 2]], th_b)
+
+
+def demand_history(scene, t, phi, phidot, mode, intact, a_g, a_v=0.0, *,
+                   reference=None) -> pd.DataFrame:
+    """The friction demand |T| / N [-] of the contacts of ``scene``'s analytic model along a
+    run: columns ``t`` [s], ``base`` (the larger demand of the pivots on the ground) and
+    ``beam`` (the larger of the beam's two contacts on the columns; NaN for a block), at the
+    samples ``t`` [s] of the history ``phi`` [rad], ``phidot`` [rad/s], ``mode`` (0 at rest,
+    +-1 rocking), ``intact`` (devices in place) under the ground accelerations ``a_g``, ``a_v``
+    [m/s^2] (arrays, or scalars for ``a_v``).
+
+    At rest: |a_g| / (g + a_v) for every contact; rocking: the Newton-Euler contact forces of
+    the mechanism with the model's phi'' (:func:`block_reactions`, :func:`frame_reactions`,
+    vectorized); inf where a contact opens. NaN where it is not computed: g + a_v <= 0 (no
+    contact; the model ends there) and, while a hybrid frame rocks with its devices intact,
+    everywhere (module docstring).
+    """
+    t = np.asarray(t, dtype=float)
+    n = t.size
+    phi, phidot, a_g = (np.broadcast_to(np.asarray(x, dtype=float), (n,))
+                        for x in (phi, phidot, a_g))
+    ge = G + np.broadcast_to(np.asarray(a_v, dtype=float), (n,))
+    mode = np.broadcast_to(np.asarray(mode, dtype=np.int64), (n,))
+    intact = np.broadcast_to(np.asarray(intact, dtype=bool), (n,))
+    structure = scene.structure
+    frame = isinstance(structure, Frame)
+    base = np.full(n, np.nan)
+    beam = np.full(n, np.nan)
+    on = ge > 0.0
+    rest = on & (mode == 0)
+    with np.errstate(divide="ignore"):
+        base[rest] = np.abs(a_g[rest]) / ge[rest]
+    if frame:
+        beam[rest] = base[rest]
+    free = ~intact if scene.has_devices else np.ones(n, dtype=bool)
+    for s in (1, -1):
+        idx = np.flatnonzero(on & (mode == s) & free)
+        if idx.size:
+            b, m = _rocking_demand(structure, s, phi[idx], phidot[idx], a_g[idx], ge[idx])
+            base[idx] = b
+            if frame:
+                beam[idx] = m
+    return pd.DataFrame({"t": t, "base": base, "beam": beam})
+
+
+def first_excess(demand: pd.DataFrame, mu: float,
+                 mu_beam: float | None = None) -> tuple[float, str, float] | None:
+    """The first time a contact needs more friction than it has: (time [s], "base" or "beam",
+    the demand [-] at the first sample beyond), or None. ``demand`` is a
+    :func:`demand_history` frame; ``mu`` the base's friction, ``mu_beam`` the beam's (default
+    ``mu``). A demand *exceeds* mu strictly (NaN never does). The time is the linear
+    interpolation of the demand's crossing of mu between the last sample at or below it and
+    the first above (the first sample itself when the demand jumps to inf, a contact
+    opening): within one output step of the first sample beyond."""
+    mu = check_finite("mu", mu)
+    mu_beam = mu if mu_beam is None else check_finite("mu_beam", mu_beam)
+    t = demand["t"].to_numpy(dtype=float)
+    best = None
+    for name, lim in (("base", mu), ("beam", mu_beam)):
+        d = demand[name].to_numpy(dtype=float)
+        over = np.flatnonzero(d > lim)
+        if not over.size:
+            continue
+        i = int(over[0])
+        ti = float(t[i])
+        if i > 0 and math.isfinite(d[i]) and math.isfinite(d[i - 1]) and d[i - 1] <= lim:
+            ti = float(t[i - 1] + (lim - d[i - 1]) / (d[i] - d[i - 1]) * (t[i] - t[i - 1]))
+        if best is None or ti < best[0]:
+            best = (ti, name, float(d[i]))
+    return best

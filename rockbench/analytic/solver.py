@@ -28,6 +28,19 @@ the integrator or the uplift search fails) the run ends there with
 
 A run ends at ``t_end`` or, earlier, once the structure is at rest and the ground motion can no
 longer uplift it.
+
+Vertical ground motion (``motion.vertical``, a_v up positive): Eq. 17 with g replaced by
+g + a_v(t) (:mod:`rockbench.analytic.reactions` derives it), and the uplift thresholds with it,
+u_g'' > lambda_ccw (g + a_v) (1 + UPLIFT_RTOL) or u_g'' < lambda_cw (g + a_v) (1 + UPLIFT_RTOL).
+The model holds while g + a_v > 0: the run stops at the first instant the ground falls faster
+than gravity (:func:`rockbench.validity.lift_off_time`; ``summary.t_lift_off``).
+
+Validity along the run (both analytic paths, :func:`finish_validity`): the friction the
+contacts need at every output step (:func:`rockbench.analytic.reactions.demand_history`) is
+compared with the scene's friction; the first excess is ``summary.sliding_onset`` (and
+``sliding_contact``), and ``summary.validity`` says from when the run is outside the model. The
+history goes on after a sliding onset (the rocking model's own answer, to compare engines with
+up to the onset); ``status`` stays "ok" (the integration succeeded).
 """
 
 from __future__ import annotations
@@ -48,10 +61,11 @@ from ..errors import ParameterError, check_positive, check_range
 from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
                       output_grid)
 from ..scene.scene import Scene
+from ..validity import lift_off_time
 from . import rules
 from .reference import Reference, reference_of
 
-__all__ = ["AnalyticSettings", "METHODS", "simulate"]
+__all__ = ["AnalyticSettings", "METHODS", "simulate", "finish_validity"]
 
 
 #: Values of ``AnalyticSettings.method``: the path chooser, the compiled path, solve_ivp's methods.
@@ -179,8 +193,14 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     if motion is None and phi0 == 0.0 and phidot0 == 0.0:
         raise ParameterError("phi0", phi0, "non-zero for a free-rocking run (no ground motion)")
     t_end = t0 + duration
+    # the ground falls faster than gravity: the model (and the run) ends there
+    t_lift = lift_off_time(mot, t0, t_end)
+    if t_lift is not None:
+        t_end = t_lift
 
     acc = mot.acceleration
+    vert = getattr(mot, "vertical", None)
+    accv = vert.acceleration if vert is not None else None
     v_rest = settings.rest_ratio * ref.p * ref.alpha
     # the rules' constants, read when the run starts (rockbench.analytic.rules)
     v_chat = rules.CHATTER_VELOCITY_RATIO * ref.p * ref.alpha
@@ -203,9 +223,14 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     max_abs = abs(phi0)
     status, reason = "ok", None
 
+    def gfac(t):
+        """(g + a_v) / g [-] at t (1 without vertical motion): the thresholds' factor."""
+        return 1.0 if accv is None else 1.0 + np.asarray(accv(t), dtype=float) / G
+
     def uplift_direction(t: float) -> int:
         a = float(acc(t))
-        return 1 if a > thr_p else (-1 if a < thr_n else 0)
+        f = float(gfac(t))
+        return 1 if a > thr_p * f else (-1 if a < thr_n * f else 0)
 
     def next_uplift(ta: float, tb: float) -> tuple[float | None, int]:
         s = uplift_direction(ta)
@@ -213,14 +238,21 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
             return ta, s
         ks = mot.knots(ta, tb)
         a = np.asarray(acc(ks), dtype=float)
-        hit = np.nonzero((a > thr_p) | (a < thr_n))[0]
+        f = gfac(ks)
+        hit = np.nonzero((a > thr_p * f) | (a < thr_n * f))[0]
         if hit.size == 0:
             return None, 0
         i = int(hit[0])
-        s = 1 if a[i] > thr_p else -1
+        s = 1 if a[i] > thr_p * (f if np.ndim(f) == 0 else f[i]) else -1
         thr = thr_p if s == 1 else thr_n
         # excess over the threshold: <= 0 at ks[i-1], > 0 at ks[i], monotonic in between
-        excess = (lambda tt: float(acc(tt)) - thr) if s == 1 else (lambda tt: thr - float(acc(tt)))
+        # (u_g'' - thr (1 + a_v / g) is monotonic between knots: GroundMotion's contract)
+        if accv is None:
+            excess = ((lambda tt: float(acc(tt)) - thr) if s == 1
+                      else (lambda tt: thr - float(acc(tt))))
+        else:
+            excess = ((lambda tt: float(acc(tt)) - thr * float(gfac(tt))) if s == 1
+                      else (lambda tt: thr * float(gfac(tt)) - float(acc(tt))))
         lo, hi = float(ks[i - 1]), float(ks[i])
         tu = brentq(excess, lo, hi, xtol=1e-13, rtol=1e-14)
         # step just past the root so that the excess is strictly positive (the increments
@@ -288,8 +320,13 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         dyn_s = ref.dyn[s]
         flag = intact
 
-        def rhs(tt, y, dyn=dyn_s, flag=flag):
-            return (y[1], dyn.acceleration(y[0], y[1], float(acc(tt)), flag))
+        if accv is None:
+            def rhs(tt, y, dyn=dyn_s, flag=flag):
+                return (y[1], dyn.acceleration(y[0], y[1], float(acc(tt)), flag))
+        else:
+            def rhs(tt, y, dyn=dyn_s, flag=flag):
+                return (y[1], dyn.acceleration(y[0], y[1], float(acc(tt)), flag,
+                                               float(accv(tt))))
 
         # impact: s phi falls to 0. A segment may start at phi = 0 (after an uplift or an
         # impact); the event is taken as positive at the segment's first instant, so that the
@@ -394,10 +431,44 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         t_overturn=t_over, exceeded_critical=exceeded or overturned, uplifted=uplifted,
         t_uplift=float(ups["t"].iloc[0]) if len(ups) else (t0 if uplifted else None),
         n_impacts=n_imp, fractured=fractured, t_fracture=t_frac, status=status, reason=reason)
+    finish_validity(summary, ref, mot, history,
+                    t_lift if t_lift is not None and t_end >= t_lift else None)
     cost = Cost(wall_s=wall, sim_time=t_end - t0, steps=steps, rhs_calls=nfev)
     return Result(backend="analytic", scene=scene, motion=mot.describe(), history=history,
                   events=events, summary=summary, cost=cost,
                   settings={**asdict(settings), "path": "solve_ivp"})
+
+
+def finish_validity(summary: Summary, ref: Reference, motion, history: pd.DataFrame,
+                    t_lift_off: float | None) -> None:
+    """Fill ``summary``'s ``sliding_onset``, ``sliding_contact``, ``t_lift_off`` and
+    ``validity`` from the run's history (both analytic paths): the friction demand of the
+    contacts at every output step (:func:`rockbench.analytic.reactions.demand_history`, with
+    the motion's vertical part) against the scene's friction
+    (:func:`rockbench.validity.friction_of`, :func:`~rockbench.validity.beam_friction_of`); the
+    verdict from :func:`rockbench.validity.run_validity`, the one rule."""
+    from ..validity import beam_friction_of, friction_of, run_validity
+    from .reactions import demand_history, first_excess
+
+    scene = ref.scene
+    vert = getattr(motion, "vertical", None)
+    t = history["t"].to_numpy(dtype=float)
+    a_v = (np.asarray(vert.acceleration(t), dtype=float) if vert is not None
+           else np.zeros_like(t))
+    demand = demand_history(scene, t, history["phi"].to_numpy(dtype=float),
+                            history["phidot"].to_numpy(dtype=float),
+                            history["mode"].to_numpy(dtype=np.int64),
+                            history["devices_intact"].to_numpy(dtype=bool),
+                            history["ground_acc"].to_numpy(dtype=float), a_v, reference=ref)
+    onset = first_excess(demand, friction_of(scene), beam_friction_of(scene))
+    summary.t_lift_off = t_lift_off
+    if onset is not None:
+        summary.sliding_onset, summary.sliding_contact, d = onset
+    else:
+        d = None
+    summary.validity = run_validity(scene, sliding_onset=summary.sliding_onset,
+                                    sliding_contact=summary.sliding_contact, demand=d,
+                                    t_lift_off=t_lift_off).reason
 
 
 def _history(ref: Reference, mot, segments, t0: float, t_end: float,

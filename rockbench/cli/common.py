@@ -131,13 +131,22 @@ def add_motion_options(p: argparse.ArgumentParser) -> None:
                    help="pulse amplitude A = a_g / (g tan alpha) > 0")
     g.add_argument("--frequency", type=arg_positive, metavar="W",
                    help="pulse frequency W = omega_g / p > 0")
+    g.add_argument("--vertical", type=float, metavar="RATIO",
+                   help="vertical part of the pulse: a_v = RATIO x u_g'' [-] (same shape, sign "
+                        "and period, in phase; a_v in m/s^2, positive up), 0 to 3 (default 0: "
+                        "horizontal only)")
     g.add_argument("--record-dt", type=arg_positive, metavar="S",
                    help="time step [s] of a headerless record file")
     g.add_argument("--record-units", metavar="UNITS",
                    help="units of a headerless record file: g, m/s2, cm/s2 (a records.csv "
                         "beside the file gives them, and its dt, when it lists the file)")
+    g.add_argument("--record-vertical", metavar="FILE",
+                   help="vertical channel of --record (acceleration positive up, in its file's "
+                        "units, converted to m/s^2): a PEER .AT2 file or a headerless file (with "
+                        "--record-dt and --record-units, or its records.csv line); sampled at "
+                        "the horizontal record's times")
     g.add_argument("--scale", type=arg_nonzero, metavar="F",
-                   help="multiply the record by F (default 1)")
+                   help="multiply the record by F (default 1; a vertical channel too)")
 
 
 def add_run_options(p: argparse.ArgumentParser) -> None:
@@ -338,9 +347,10 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
     beside it, as :func:`rockbench.load_record` does), ``--phi0`` [rad] or ``--phi0-alpha``
     [multiples of alpha]."""
     pulse_opts = {"--sign": args.sign, "--amplitude": args.amplitude,
-                  "--frequency": args.frequency}
+                  "--frequency": args.frequency, "--vertical": getattr(args, "vertical", None)}
     record_opts = {"--record-dt": args.record_dt, "--record-units": args.record_units,
-                   "--scale": args.scale}
+                   "--scale": args.scale,
+                   "--record-vertical": getattr(args, "record_vertical", None)}
     if args.pulse is None:
         for opt, v in pulse_opts.items():
             if v is not None:
@@ -357,8 +367,14 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
                           ("--frequency", "W = omega_g / p > 0")):
             if pulse_opts[opt] is None:
                 raise MissingOption(opt, what, "with --pulse")
-        pulse = RickerPulse.dimensionless(args.amplitude, args.frequency, scene.structure,
-                                          args.pulse, 1 if args.sign is None else args.sign)
+        try:
+            pulse = RickerPulse.dimensionless(args.amplitude, args.frequency, scene.structure,
+                                              args.pulse, 1 if args.sign is None else args.sign,
+                                              vertical_ratio=args.vertical or 0.0)
+        except ParameterError as exc:
+            if exc.name != "vertical_ratio":
+                raise
+            raise ParameterError("--vertical", args.vertical, exc.valid) from None
         duration = getattr(args, "duration", None)
         if duration is not None and pulse.t_start + float(duration) <= 0.0:
             # the run starts 3 T_g before the pulse centre (t = 0): a shorter run ends before
@@ -388,8 +404,23 @@ def motion_from(args: argparse.Namespace, scene) -> tuple[Any, float]:
                 raise MissingOption("--record-units", "an acceleration unit (g, m/s2, cm/s2)",
                                     f"for the headerless record file {path.name} (or list it "
                                     "in a records.csv beside it)")
-        return load_record(path, dt=args.record_dt, units=args.record_units,
-                           scale=1.0 if args.scale is None else args.scale), 0.0
+        vpath = None
+        if args.record_vertical is not None:
+            vpath = Path(args.record_vertical)
+            if not vpath.is_file():
+                vpath = _bundled_record_path(args.record_vertical)
+        try:
+            return load_record(path, dt=args.record_dt, units=args.record_units,
+                               scale=1.0 if args.scale is None else args.scale,
+                               vertical=vpath, vertical_dt=args.record_dt,
+                               vertical_units=args.record_units), 0.0
+        except ParameterError as exc:
+            if not exc.name.startswith("record-vertical"):
+                raise
+            raise ParameterError("--record-vertical" if exc.name == "record-vertical"
+                                 else "--" + exc.name.replace("record-vertical-", "record-"),
+                                 exc.value, exc.valid, f"for --record-vertical {vpath.name}"
+                                 ) from None
 
     phi0, option = args.phi0, "--phi0"
     if args.phi0_alpha is not None:

@@ -313,6 +313,9 @@ def cmd_run(args: argparse.Namespace) -> int:
          f"(at t = {s.t_fracture:.4g} s)" if s.t_fracture is not None else ""],
         ["status", s.status, ""],
     ]
+    if s.validity is not None:
+        rows.append(["model validity", s.validity,
+                     f"(contact: {s.sliding_contact})" if s.sliding_contact else ""])
     if s.eta_measured:
         etas = ", ".join(f"{e:.4f}" for e in s.eta_measured[:8])
         more = f", ... ({len(s.eta_measured)} in all)" if len(s.eta_measured) > 8 else ""
@@ -377,10 +380,14 @@ def cmd_compare(args: argparse.Namespace) -> int:
         except OSError as e:
             raise RockbenchError(f"cannot write --report {args.report}: "
                                  f"{e.strerror or e}") from None
+    ref = next((r for r in comparison.results.values() if r.backend == "analytic"), None)
     if args.json:
         data = {"scene": scene.name, "motion": comparison.motion, "phi0": comparison.phi0,
                 "table": table.to_dict(orient="records"),
                 "eta": comparison.eta.to_dict(orient="records")}
+        if ref is not None:     # the analytic model's own validity (docs/metrics.md)
+            data.update({k: getattr(ref.summary, k) for k in
+                         ("sliding_onset", "sliding_contact", "t_lift_off", "validity")})
         if csv_path:
             data["csv"] = str(csv_path)
         if report_path:
@@ -395,6 +402,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     print("units: max_abs_phi_over_alpha, peak_rel_error, nrmse, eta_max_rel_error: -; "
           "max_penetration, max_sliding: m; wall_s: s; real_time_factor: simulated s per wall s"
           "; n/a: not measured (e.g. the analytic model has no contact to penetrate or slide)")
+    if ref is not None and ref.summary.validity and ref.summary.validity != "inside":
+        print(f"analytic model: {ref.summary.validity}")
     for name, res in comparison.results.items():       # a run not ok says why, not only that
         if res.summary.status != "ok":
             print(f"{name}: {res.summary.status}: {res.summary.reason or 'no reason given'}")

@@ -57,6 +57,19 @@ class Configuration(NamedTuple):
     bodies: tuple[BodyKinematics, ...]
 
 
+def _body_about_many(ox, oy, dox, doy, ddox, ddoy, rx, ry, th, dth, ddth) -> dict:
+    """:func:`_body_about` over arrays (numpy broadcasting): the fields of
+    :class:`BodyKinematics` as a dict of arrays."""
+    import numpy as np
+
+    c, s = np.cos(th), np.sin(th)
+    qx, qy = c * rx - s * ry, s * rx + c * ry
+    return {"x": ox + qx, "y": oy + qy, "theta": th,
+            "dx": dox - dth * qy, "dy": doy + dth * qx, "dtheta": dth,
+            "ddx": ddox - ddth * qy - dth * dth * qx, "ddy": ddoy + ddth * qx - dth * dth * qy,
+            "ddtheta": ddth}
+
+
 def _rotated(rx: float, ry: float, c: float, s: float) -> tuple[float, float]:
     return c * rx - s * ry, s * rx + c * ry
 
@@ -97,6 +110,16 @@ class BlockMechanism:
         rx, ry = -px, self.block.H  # pivot -> G at rest
         body = _body_about(px, py, 0.0, 0.0, 0.0, 0.0, rx, ry, phi, 1.0, 0.0)
         return Configuration(phi, (body,))
+
+    def configuration_many(self, phi) -> list[dict]:
+        """:meth:`configuration` over an array ``phi`` [rad]: one dict per body of arrays
+        keyed by the fields of :class:`BodyKinematics` (same formulas, tested against it)."""
+        import numpy as np
+
+        phi = np.asarray(phi, dtype=float)
+        px, py = self.pivot
+        one, zero = np.ones_like(phi), np.zeros_like(phi)
+        return [_body_about_many(px, py, 0.0, 0.0, 0.0, 0.0, -px, self.block.H, phi, one, zero)]
 
     def limit(self) -> float:
         """Largest |phi| the mechanism can reach [rad] (a block lies on its side at pi/2 + ...;
@@ -221,6 +244,52 @@ class FrameMechanism:
     def limit(self) -> float:
         """Largest |phi| [rad] up to which the linkage can be assembled (its toggle), or pi."""
         return geometric_limit(self)
+
+    def configuration_many(self, phi) -> list[dict]:
+        """:meth:`configuration` over an array ``phi`` [rad]: one dict per body (left, beam,
+        right) of arrays keyed by the fields of :class:`BodyKinematics` (same closed forms,
+        tested against it). ValueError beyond the linkage's reach."""
+        import numpy as np
+
+        phi = np.asarray(phi, dtype=float)
+        Ax, Ay = self._A
+        Dx, Dy = self._D
+        L, r0, r1 = self._L, self._rho0, self._rho1
+        pab = self._phiAB0 + phi
+        sab, cab = np.sin(pab), np.cos(pab)
+        Bx, By = Ax + r0 * cab, Ay + r0 * sab
+        ux, uy = Bx - Dx, By - Dy
+        d2 = ux * ux + uy * uy
+        d = np.sqrt(d2)
+        ap = (d2 + r1 * r1 - L * L) / (2.0 * d)
+        h2 = r1 * r1 - ap * ap
+        if np.any(h2 < 0.0):
+            raise ValueError("phi beyond the reach of the frame mechanism; see "
+                             "geometric_limit()")
+        hh = self._branch * np.sqrt(h2)
+        Cx = Dx + (ap * ux - hh * uy) / d
+        Cy = Dy + (ap * uy + hh * ux) / d
+        pbc = np.arctan2(Cy - By, Cx - Bx)
+        pcd = np.arctan2(Cy - Dy, Cx - Dx)
+        sbc, cbc = np.sin(pbc), np.cos(pbc)
+        scd, ccd = np.sin(pcd), np.cos(pcd)
+        m11, m12, m21, m22 = -L * sbc, r1 * scd, L * cbc, -r1 * ccd
+        det = m11 * m22 - m12 * m21
+        f1, f2 = r0 * sab, -r0 * cab
+        dbc = (f1 * m22 - m12 * f2) / det
+        dcd = (m11 * f2 - f1 * m21) / det
+        g1 = r0 * cab + L * cbc * dbc * dbc - r1 * ccd * dcd * dcd
+        g2 = r0 * sab + L * sbc * dbc * dbc - r1 * scd * dcd * dcd
+        ddbc = (g1 * m22 - m12 * g2) / det
+        ddcd = (m11 * g2 - g1 * m21) / det
+        bx, by = Bx - Ax, By - Ay
+        one, zero = np.ones_like(phi), np.zeros_like(phi)
+        left = _body_about_many(Ax, Ay, 0.0, 0.0, 0.0, 0.0, *self._rl, phi, one, zero)
+        beam = _body_about_many(Bx, By, -by, bx, -bx, -by, *self._rb, pbc - self._phiBC0, dbc,
+                                ddbc)
+        right = _body_about_many(Dx, Dy, 0.0, 0.0, 0.0, 0.0, *self._rr, pcd - self._phiCD0,
+                                 dcd, ddcd)
+        return [left, beam, right]
 
     def angles_many(self, phi) -> tuple:
         """Vectorized over an array ``phi`` [rad]: (theta_beam, theta_right) [rad] and their

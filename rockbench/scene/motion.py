@@ -1,7 +1,12 @@
-"""Horizontal ground motions: Ricker pulses (Eqs. 29-30 of the paper) and recorded accelerograms.
+"""Ground motions: Ricker pulses (Eqs. 29-30 of the paper) and recorded accelerograms, each
+horizontal with an optional vertical component.
 
 Conventions (``docs/conventions.md``): SI units, seconds, m/s^2. The ground acceleration
-``u_g''(t)`` is horizontal, positive to the right (+x). A run starts from rest at
+``u_g''(t)`` is horizontal, positive to the right (+x). A motion's ``vertical`` is None (no
+vertical motion) or another :class:`GroundMotion` on the same clock whose acceleration
+``a_v(t)`` [m/s^2] is vertical, positive up (+y): a pulse's vertical part is the same wavelet
+times ``vertical_ratio`` (in phase), a record's is a second channel sampled at the horizontal
+channel's times (:meth:`Record.with_vertical`). A run starts from rest at
 :attr:`GroundMotion.t_start`; after :attr:`GroundMotion.t_end` the excitation is zero (records) or
 below 1e-12 of its peak (pulses), so a solver may treat the motion as free rocking from there on.
 
@@ -13,7 +18,12 @@ Every motion offers the same small interface (:class:`GroundMotion`):
   between consecutive knots and can be refined with ``scipy.optimize.brentq``;
 * ``max_abs_after(t)`` [m/s^2]: the exact supremum of ``|u_g''|`` over ``[t, inf)`` (lets a solver
   decide that a structure at rest will never uplift again);
-* ``peak`` [m/s^2], ``describe()`` (JSON-safe metadata) and ``scaled(factor)``.
+* ``peak`` [m/s^2], ``describe()`` (JSON-safe metadata) and ``scaled(factor)``;
+* ``vertical``: None or the vertical component (a :class:`GroundMotion`, positive up). With
+  one, ``knots`` serve both: between consecutive knots every combination
+  ``u_g'' + c a_v`` (c a constant) is monotonic (pulse: a_v = ratio u_g''; record: both linear
+  between the shared samples), so a threshold such as ``|u_g''| > lambda (g + a_v)`` is still
+  bracketed by the knots.
 """
 
 from __future__ import annotations
@@ -74,6 +84,14 @@ def _check_sign(sign: Any) -> int:
     return int(sign)
 
 
+def _check_vertical_ratio(ratio: Any) -> float:
+    """The vertical ratio as a float in the limit ``vertical_ratio`` of
+    :mod:`rockbench.limits` ([0, 3]); ParameterError naming ``vertical_ratio`` otherwise."""
+    if isinstance(ratio, (bool, np.bool_)):
+        raise ParameterError("vertical_ratio", ratio, "a finite number in [0, 3]")
+    return check_in_limit("vertical_ratio", "vertical_ratio", ratio)
+
+
 def _check_interval(t0: Any, t1: Any) -> tuple[float, float]:
     a, b = check_finite("t0", t0), check_finite("t1", t1)
     if b < a:
@@ -90,13 +108,19 @@ class GroundMotion(abc.ABC):
     * attributes (or properties) ``t_start`` [s], the time at which a run starts from rest, and
       ``t_end`` [s], after which ``|u_g''|`` is identically zero or below 1e-12 of :attr:`peak`;
     * :meth:`acceleration`, :meth:`knots`, :meth:`max_abs_after`, :attr:`peak`,
-      :meth:`describe` and :meth:`scaled` as documented here.
+      :meth:`describe` and :meth:`scaled` as documented here;
+    * :attr:`vertical`: None (the default: no vertical motion) or a :class:`GroundMotion`
+      (whose own ``vertical`` is None) giving the vertical ground acceleration a_v(t) [m/s^2],
+      positive up, on the same clock (same ``t_start``, ``t_end``); ``knots`` then bracket
+      thresholds of both (module docstring) and ``scaled`` scales both.
 
     Instances are immutable and picklable (they travel to sweep workers).
     """
 
     t_start: float
     t_end: float
+    #: The vertical component (positive up) or None; see the class docstring.
+    vertical: "GroundMotion | None" = None
 
     @abc.abstractmethod
     def acceleration(self, t):
@@ -205,6 +229,11 @@ class RickerPulse(GroundMotion):
     antisymmetric: positive lobe at t < 0, negative main lobe at t > 0), -1 its mirror image.
     T_g = 2 pi / omega_g is the period at which the wavelet's Fourier spectrum peaks.
 
+    With ``vertical_ratio`` r > 0 the ground also moves vertically, in phase:
+    a_v(t) = r u_g''(t) [m/s^2], positive up (the same wavelet, sign and period; peak r a_g).
+    :attr:`vertical` is then that pulse (a :class:`RickerPulse` of amplitude r a_g), None when
+    r = 0.
+
     The pulse is defined for all t; a run starts from rest at ``t_start = -3 T_g`` and
     ``t_end = +3 T_g``. Beyond +-3 T_g, |u_g''| / a_g < 1e-36 (symmetric) and < 1e-22
     (antisymmetric): the truncation is far below the 1e-12 of the :class:`GroundMotion` contract.
@@ -221,14 +250,23 @@ class RickerPulse(GroundMotion):
         T_g > 0 [s], in [1e-4, 1e4] s (limit ``period``).
     shape : {"symmetric", "antisymmetric"}
     sign : {+1, -1}
+    vertical_ratio : float
+        r [-], peak vertical over peak horizontal acceleration, in [0, 3] (limit
+        ``vertical_ratio``; default 0: no vertical motion).
     """
 
-    def __init__(self, amplitude: float, period: float, shape: str = "symmetric", sign: int = 1):
+    def __init__(self, amplitude: float, period: float, shape: str = "symmetric", sign: int = 1,
+                 vertical_ratio: float = 0.0):
         self._amplitude = check_in_limit("amplitude", "amplitude", amplitude)
         self._period = check_in_limit("period", "period", period)
         self._shape = _check_shape(shape)
         self._sign = _check_sign(sign)
+        self._vertical_ratio = _check_vertical_ratio(vertical_ratio)
         self._dimensionless: dict[str, float] | None = None
+        self.vertical = None
+        if self._vertical_ratio > 0.0:
+            self.vertical = RickerPulse(self._vertical_ratio * self._amplitude, self._period,
+                                        self._shape, self._sign)
         if shape == "symmetric":
             self._wavelet, self._scale = _symmetric_wavelet, self._sign * self._amplitude
         else:
@@ -242,14 +280,14 @@ class RickerPulse(GroundMotion):
     # --- construction helpers ---------------------------------------------------------------
     @classmethod
     def dimensionless(cls, A: float, W: float, structure: Any, shape: str = "symmetric",
-                      sign: int = 1) -> RickerPulse:
+                      sign: int = 1, vertical_ratio: float = 0.0) -> RickerPulse:
         """The pulse at the paper's dimensionless coordinates (Fig. 4 axes).
 
         ``A = a_g / (g tan alpha)`` > 0 and ``W = omega_g / p`` > 0 with ``alpha`` [rad] and ``p``
         [rad/s] of ``structure`` (the taller column of a frame), g = :data:`rockbench.constants.G`:
         a_g = A g tan(alpha) [m/s^2] and T_g = 2 pi / (W p) [s]. A is at most 100 and W in
         [0.01, 1000] (limits ``A`` and ``W`` of :mod:`rockbench.limits`; the paper's maps use
-        A up to ~20 and W 0.3-50).
+        A up to ~20 and W 0.3-50). ``vertical_ratio`` as in the class docstring.
         """
         A = check_in_limit("A", "A", A)
         W = check_in_limit("W", "W", W)
@@ -259,7 +297,8 @@ class RickerPulse(GroundMotion):
             raise ParameterError("structure", structure,
                                  "a Block or Frame (an object with .alpha [rad] and .p [rad/s])"
                                  ) from None
-        pulse = cls(A * G * math.tan(alpha), 2.0 * math.pi / (W * p), shape, sign)
+        pulse = cls(A * G * math.tan(alpha), 2.0 * math.pi / (W * p), shape, sign,
+                    vertical_ratio)
         pulse._dimensionless = {"A": A, "W": W, "alpha_rad": alpha, "p_rad_s": p}
         return pulse
 
@@ -288,6 +327,11 @@ class RickerPulse(GroundMotion):
     def sign(self) -> int:
         """+1 (as printed in the paper) or -1 (mirrored)."""
         return self._sign
+
+    @property
+    def vertical_ratio(self) -> float:
+        """r [-]: a_v = r u_g'' (0: no vertical motion)."""
+        return self._vertical_ratio
 
     @property
     def t_start(self) -> float:
@@ -350,30 +394,36 @@ class RickerPulse(GroundMotion):
         }
         if self._shape == "antisymmetric":
             d["beta"] = antisymmetric_beta()
+        if self._vertical_ratio > 0.0:      # absent without vertical motion (keys unchanged)
+            d["vertical_ratio"] = self._vertical_ratio
         if self._dimensionless is not None:
             d.update(self._dimensionless)
         return d
 
     def scaled(self, factor: float) -> RickerPulse:
         """The same pulse with a_g -> |factor| a_g and sign -> sign * sign(factor); the
-        dimensionless amplitude A (if any) scales with it, W is unchanged."""
+        dimensionless amplitude A (if any) scales with it, W is unchanged. The vertical part
+        (a_v = r u_g'') scales with it: the ratio r is kept."""
         factor = _check_factor(factor)
         new = RickerPulse(abs(factor) * self._amplitude, self._period, self._shape,
-                          self._sign * (1 if factor > 0 else -1))
+                          self._sign * (1 if factor > 0 else -1), self._vertical_ratio)
         if self._dimensionless is not None:
             new._dimensionless = dict(self._dimensionless, A=abs(factor) * self._dimensionless["A"])
         return new
 
     def __repr__(self) -> str:
+        vr = (f", vertical_ratio={self._vertical_ratio!r}" if self._vertical_ratio > 0.0
+              else "")
         return (f"RickerPulse(amplitude={self._amplitude!r}, period={self._period!r}, "
-                f"shape={self._shape!r}, sign={self._sign!r})")
+                f"shape={self._shape!r}, sign={self._sign!r}{vr})")
 
 
 def make_pulse(shape: str, sign: int, *, structure: Any = None, A: float | None = None,
                W: float | None = None, amplitude: float | None = None,
-               period: float | None = None) -> RickerPulse:
+               period: float | None = None, vertical_ratio: float = 0.0) -> RickerPulse:
     """Build a :class:`RickerPulse` either from dimensionless ``A``, ``W`` and ``structure``
-    (see :meth:`RickerPulse.dimensionless`) or from ``amplitude`` [m/s^2] and ``period`` [s].
+    (see :meth:`RickerPulse.dimensionless`) or from ``amplitude`` [m/s^2] and ``period`` [s],
+    with the vertical part ``vertical_ratio`` [-] times the horizontal one (default 0: none).
 
     Exactly one of the two sets must be given, completely; anything else raises
     :class:`ParameterError` naming the missing or conflicting parameter.
@@ -389,12 +439,12 @@ def make_pulse(shape: str, sign: int, *, structure: Any = None, A: float | None 
         for key, value in (("A", A), ("W", W), ("structure", structure)):
             if value is None:
                 raise ParameterError(key, None, "given: A, W and structure go together")
-        return RickerPulse.dimensionless(A, W, structure, shape, sign)
+        return RickerPulse.dimensionless(A, W, structure, shape, sign, vertical_ratio)
     if dimensional:
         for key, value in (("amplitude", amplitude), ("period", period)):
             if value is None:
                 raise ParameterError(key, None, "given: amplitude and period go together")
-        return RickerPulse(amplitude, period, shape, sign)
+        return RickerPulse(amplitude, period, shape, sign, vertical_ratio)
     raise ParameterError("A", None, "given with W and structure, unless amplitude and period are",
                          "no pulse intensity was specified")
 
@@ -406,9 +456,13 @@ def motion_from_spec(spec: dict[str, Any] | None, structure: Any = None) -> Grou
     ``None`` or ``{"kind": "none"}``: free rocking (returns None).
     ``{"kind": "ricker", "shape", "sign", "A", "W"}`` (dimensionless, needs ``structure``) or
     ``{"kind": "ricker", "shape", "sign", "amplitude" [m/s^2], "period" [s]}``: see
-    :func:`make_pulse`. ``{"kind": "record", "path", "dt" [s], "units", "scale"}``: see
+    :func:`make_pulse`; either may add ``"vertical_ratio"`` [-] (a vertical part, default 0;
+    ``describe()`` writes it when it is not 0, so a description reads back as the same pulse).
+    ``{"kind": "record", "path", "dt" [s], "units", "scale"}``: see
     :func:`rockbench.scene.records.load_record` (``dt`` and ``units`` may be omitted for an
-    AT2 file).
+    AT2 file); ``"vertical_path"`` (with ``"vertical_dt"`` [s] and ``"vertical_units"`` for a
+    headerless file) adds the vertical channel (:func:`rockbench.scene.records.load_record`'s
+    ``vertical``), scaled by the same ``scale``.
     """
     if spec is None:
         return None
@@ -419,17 +473,25 @@ def motion_from_spec(spec: dict[str, Any] | None, structure: Any = None) -> Grou
     if kind == "none":
         return None
     if kind == "ricker":
+        vr = spec.get("vertical_ratio", 0.0)
         if "A" in spec or "W" in spec:
             return make_pulse(spec.get("shape", "symmetric"), spec.get("sign", 1),
-                              structure=structure, A=spec.get("A"), W=spec.get("W"))
+                              structure=structure, A=spec.get("A"), W=spec.get("W"),
+                              vertical_ratio=vr)
         return make_pulse(spec.get("shape", "symmetric"), spec.get("sign", 1),
-                          amplitude=spec.get("amplitude"), period=spec.get("period"))
+                          amplitude=spec.get("amplitude", spec.get("amplitude_m_s2")),
+                          period=spec.get("period", spec.get("period_s")), vertical_ratio=vr)
     if kind == "record":
         from .records import load_record
         if not isinstance(spec.get("path"), (str, os.PathLike)):
             raise ParameterError("motion.path", spec.get("path"), "the path of a record file")
+        vpath = spec.get("vertical_path")
+        if vpath is not None and not isinstance(vpath, (str, os.PathLike)):
+            raise ParameterError("motion.vertical_path", vpath, "the path of a record file")
         return load_record(spec["path"], dt=spec.get("dt"), units=spec.get("units"),
-                           scale=spec.get("scale", 1.0))
+                           scale=spec.get("scale", 1.0), vertical=vpath,
+                           vertical_dt=spec.get("vertical_dt"),
+                           vertical_units=spec.get("vertical_units"))
     raise ParameterError("motion.kind", kind, "one of ricker, record, none")
 
 
@@ -454,12 +516,16 @@ class Record(GroundMotion):
         Units of the original data, any spelling of :func:`parse_units` (metadata only; kept
         as its canonical name, a key of :data:`UNIT_FACTORS`).
 
+    vertical : Record, optional
+        The vertical channel [m/s^2], positive up (see :meth:`with_vertical`: it is sampled
+        at this record's times). Default None: no vertical motion.
+
     At most ``record_samples`` samples (limit of :mod:`rockbench.limits`, 2e6 unless
     ``ROCKBENCH_RECORD_SAMPLES`` raises it), checked before any array is built.
     """
 
     def __init__(self, time: Any, acceleration: Any, name: str = "", source: str = "",
-                 units_in: str = "m/s2"):
+                 units_in: str = "m/s2", vertical: Record | None = None):
         _check_samples("time", time)
         _check_samples("acceleration", acceleration)
         t = _finite_vector("time", time)
@@ -484,6 +550,52 @@ class Record(GroundMotion):
         self._sufmax = np.maximum.accumulate(absacc[::-1])[::-1]
         self._scale = 1.0
         self._nominal_dt: float | None = None  # the exact dt of equally spaced samples, if known
+        self.vertical: Record | None = None
+        self._vertical_resampled = False
+        if vertical is not None:
+            self._attach_vertical(vertical)
+
+    # --- the vertical channel ------------------------------------------------------------------
+    def _attach_vertical(self, vertical: Any) -> None:
+        if not isinstance(vertical, Record):
+            raise ParameterError("vertical", type(vertical).__name__,
+                                 "a Record (the vertical channel, m/s^2, positive up)")
+        if vertical.vertical is not None:
+            raise ParameterError("vertical", vertical, "a Record without a vertical channel "
+                                 "of its own")
+        same = (vertical.npts == self.npts
+                and np.allclose(vertical.time, self._time, rtol=0.0,
+                                atol=1e-9 * max(1.0, float(np.max(np.abs(self._time))))))
+        samples = vertical.samples if same else vertical.acceleration(self._time)
+        v = Record(self._time, samples, name=vertical.name, source=vertical.source,
+                   units_in=vertical.units_in)
+        v._nominal_dt = self._nominal_dt
+        v._scale = vertical._scale
+        self.vertical = v
+        self._vertical_resampled = not same
+
+    def with_vertical(self, vertical: Record | None) -> Record:
+        """This record with ``vertical`` [m/s^2, positive up] as its vertical channel (None:
+        without one).
+
+        The two channels share one time base: the vertical channel is *sampled at this
+        record's times* (its own linear interpolation there, 0 outside its span). Two
+        components of one station share the time base already (same start, dt and number of
+        samples): their samples are then kept exactly. Otherwise the resampling is exact only
+        where the vertical's samples are a subset of these times; a vertical sampled more
+        finely loses what lies between them (``describe()["vertical_resampled"]`` says so).
+        Why one time base: between two shared samples both accelerations are linear, so every
+        threshold of the model (uplift at |u_g''| = lambda (g + a_v), sliding at
+        |u_g''| = mu (g + a_v), loss of contact at a_v = -g) is crossed at most once and found
+        exactly, by both analytic paths.
+        """
+        new = Record(self._time, self._acc, name=self.name, source=self.source,
+                     units_in=self.units_in)
+        new._scale = self._scale
+        new._nominal_dt = self._nominal_dt
+        if vertical is not None:
+            new._attach_vertical(vertical)
+        return new
 
     @classmethod
     def from_samples(cls, acc: Any, dt: float, t0: float = 0.0, units: str = "m/s2",
@@ -575,7 +687,7 @@ class Record(GroundMotion):
         return max(later, abs(self.acceleration(t)))
 
     def describe(self) -> dict[str, Any]:
-        return {
+        d = {
             "kind": "record",
             "name": self.name,
             "source": self.source,
@@ -587,19 +699,33 @@ class Record(GroundMotion):
             "pga_m_s2": self.peak,
             "scale": self._scale,
         }
+        if self.vertical is not None:       # absent without a vertical channel (keys unchanged)
+            d["vertical_name"] = self.vertical.name
+            d["vertical_pga_m_s2"] = self.vertical.peak
+            d["vertical_resampled"] = self._vertical_resampled
+        return d
 
     def scaled(self, factor: float) -> Record:
-        """The record with every sample times ``factor``; the name gets " x{factor:g}"."""
+        """The record with every sample times ``factor``; the name gets " x{factor:g}". A
+        vertical channel is scaled by the same factor (the whole ground motion, both
+        components: a negative factor reverses both)."""
         factor = _check_factor(factor)
         new = Record(self._time, factor * self._acc, name=f"{self.name} x{factor:g}",
                      source=self.source, units_in=self.units_in)
         new._scale = self._scale * factor
         new._nominal_dt = self._nominal_dt
+        if self.vertical is not None:
+            v = self.vertical.scaled(factor)
+            v._nominal_dt = self._nominal_dt
+            new.vertical = v
+            new._vertical_resampled = self._vertical_resampled
         return new
 
     def __repr__(self) -> str:
+        vert = (f", vertical={self.vertical.name!r} (pga {self.vertical.peak:g} m/s2)"
+                if self.vertical is not None else "")
         return (f"Record(name={self.name!r}, npts={self.npts}, dt={self.dt:g}, "
-                f"t_start={self.t_start:g}, pga={self.peak:g} m/s2)")
+                f"t_start={self.t_start:g}, pga={self.peak:g} m/s2{vert})")
 
 
 def _finite_vector(name: str, values: Any) -> np.ndarray:

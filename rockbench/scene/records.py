@@ -144,10 +144,17 @@ def load_columns(path: str | os.PathLike, *, dt: float, units: str, t0: float = 
 
 
 def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str | None = None,
-                scale: float = 1.0) -> Record:
+                scale: float = 1.0, vertical: str | os.PathLike | None = None,
+                vertical_dt: float | None = None,
+                vertical_units: str | None = None) -> Record:
     """Load a record by file type: ``.AT2`` (any case) with :func:`load_at2`, anything else with
     :func:`load_columns`, which needs ``dt`` [s] and ``units``. The result is multiplied by
     ``scale`` (finite, non-zero) when it is not 1.
+
+    ``vertical``: the file of the vertical channel (positive up), read the same way (its own
+    ``vertical_dt`` [s] and ``vertical_units`` for a headerless file; errors name
+    ``record-vertical``), attached with :meth:`Record.with_vertical` (sampled at the horizontal
+    channel's times) and multiplied by the same ``scale``.
 
     A headerless file listed in a ``records.csv`` beside it (see :func:`find_records`) takes
     its dt and units from there unless they are given.
@@ -188,6 +195,17 @@ def load_record(path: str | os.PathLike, *, dt: float | None = None, units: str 
                                  f"required for the headerless record file {path.name}")
         dt = check_in_limit("record_dt", "record-dt", dt)
         record = load_columns(path, dt=dt, units=parse_units(units, "record-units"))
+    if vertical is not None:
+        vpath = _check_path(vertical, "record-vertical")
+        try:
+            vrec = load_record(vpath, dt=vertical_dt, units=vertical_units)
+        except ParameterError as exc:
+            # the vertical file's own options: name them as such
+            name = {"record-dt": "record-vertical-dt", "record-units": "record-vertical-units"
+                    }.get(exc.name, "record-vertical")
+            raise ParameterError(name, exc.value, exc.valid, f"vertical channel {vpath.name}"
+                                 ) from None
+        record = record.with_vertical(vrec)
     return record if scale == 1.0 else record.scaled(scale)
 
 

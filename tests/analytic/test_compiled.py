@@ -18,6 +18,7 @@ the reference's own verdict changes between A (1 - 0.005) and A (1 + 0.005).
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
@@ -407,12 +408,15 @@ def test_compiled_equation_of_motion_matches_dynamics(name, kind):
     for i, s in enumerate((1, -1)):
         dyn = ref.dyn[s]
         for x in s * np.linspace(0.0, 0.999 * ref.fall[s], 120):
-            for pd, ag, intact in ((0.3, 2.0, True), (-0.7, -3.0, False), (0.0, 0.0, True)):
-                a = dyn.acceleration(float(x), pd, ag, intact)
-                b = _phidd(float(x), pd, ag, geo[i], intact, kin)
+            for pd, ag, av, intact in ((0.3, 2.0, 0.0, True), (-0.7, -3.0, 0.0, False),
+                                       (0.0, 0.0, 0.0, True), (0.4, -1.5, -4.0, True),
+                                       (-0.2, 2.5, 3.0, False)):
+                a = dyn.acceleration(float(x), pd, ag, intact, av)
+                b = _phidd(float(x), pd, ag, 9.81 + av, geo[i], intact, kin)
                 t = dyn.terms(float(x), intact)
-                scale = (abs(t.ground * ag) + abs(t.velocity * pd * pd) + abs(t.gravity * 9.81)
-                         + abs(t.tendon) + abs(t.damping * pd)) / t.inertia
+                scale = (abs(t.ground * ag) + abs(t.velocity * pd * pd)
+                         + abs(t.gravity * (9.81 + av)) + abs(t.tendon)
+                         + abs(t.damping * pd)) / t.inertia
                 worst = max(worst, abs(a - b) / scale)
     assert worst <= 1e-12
 
@@ -456,8 +460,9 @@ def test_step_forms_equal_the_general_form(name, form):
     hint = np.zeros(1, dtype=np.int64)
     empty = np.zeros(1)
     beyond = 0
-    for mk, shape in ((1, "symmetric"), (2, "antisymmetric")):
-        m = RickerPulse.dimensionless(2.5, 3.0, scene.structure, shape, 1)
+    for (mk, shape), vr in itertools.product(((1, "symmetric"), (2, "antisymmetric")),
+                                             (0.0, 0.6)):
+        m = RickerPulse.dimensionless(2.5, 3.0, scene.structure, shape, 1, vertical_ratio=vr)
         _, mp, *_ = compiled._motion_arrays(m)
         for i, s in enumerate((1, -1)):
             g = geo[i]
@@ -468,8 +473,8 @@ def test_step_forms_equal_the_general_form(name, form):
                 t = m.t_start + (m.t_end - m.t_start) * k / 96
                 want = _f_general(t, s * x, 0.3 - 0.01 * k, mk, mp, empty, empty, hint, g, True,
                                   kin)
-                got = _f(t, s * x, 0.3 - 0.01 * k, form, g[40], g[41], g[42], mk, mp[0], mp[1],
-                         mp[4], g, True, dev, kin, mp, empty, empty, hint)
+                got = _f(t, s * x, 0.3 - 0.01 * k, form, g[40], g[41], g[42], mk, mp[0], mp[6],
+                         mp[1], mp[4], g, True, dev, kin, mp, empty, empty, hint)
                 if form == 3 and not (g[45] <= s * g[44] * x <= g[46]):
                     assert math.isnan(got)
                     beyond += 1
