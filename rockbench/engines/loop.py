@@ -136,12 +136,10 @@ def device_geometry(backend) -> DeviceGeometry | None:
 
 
 def ground_gravity(motion, t_mid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The gravity (gravity_x, gravity_y) [m/s^2] each engine step applies at the steps'
-    midpoints ``t_mid`` [s]: (-u_g''(t), -(g + u_v''(t))), the ground motion as the inertial
-    force of the foundation's frame, exact for rigid bodies (their poses are relative to the
-    moving ground, so a slip is measured against it). u_v'' is ``motion.vertical``'s
-    acceleration (positive up) when the motion has a vertical component, else 0 (gravity_y
-    is then exactly -g); ``motion`` None: no ground motion."""
+    """The gravity (gravity_x, gravity_y) [m/s^2] of the engine steps at their midpoints
+    ``t_mid`` [s]: (-u_g''(t), -(g + u_v''(t))), the ground motion as the inertial force of the
+    foundation's frame, exact for rigid bodies (poses relative to the moving ground). u_v'':
+    ``motion.vertical``'s acceleration (positive up), else 0 (gravity_y exactly -g)."""
     n = t_mid.size
     if motion is None or not n:
         return np.zeros(n), np.full(n, -G)
@@ -263,10 +261,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
                     if native:
                         backend._remove_devices()
             ts = clock()
-            if vertical:
-                step(gx[k], forces, gy[k])
-            else:                          # gravity_y = -g, the adapters' default
-                step(gx[k], forces)
+            step(gx[k], forces, gy[k]) if vertical else step(gx[k], forces)  # default: -g
             backend.wall_s += clock() - ts
             backend.steps += 1
             prev_t, prev = t, state

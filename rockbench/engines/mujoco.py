@@ -100,7 +100,10 @@ class MujocoSettings(EngineSettings):
         a few milliseconds and the pivots slip 3 mm; at 0.5 the contacts bounce).
     impedance : solimp dmin = dmax [-], in [mjMINIMP, mjMAXIMP] = [1e-4, 0.9999] (MuJoCo clamps
         anything outside): the share of the contact's constraint force that is not regularized
-        away (MuJoCo's default 0.9-0.95 lets the pivots creep).
+        away (MuJoCo's default 0.9-0.95 lets the pivots creep). A scene that slides needs 0.999:
+        at 0.99 friction is regularized enough that a squat block (b/h = 1) on mu = 0.8 tips
+        and slides 23 % short of Newmark's sliding block, 3.3 % too far on mu = 0.2; at 0.999
+        within 0.4 % (``docs/engines/README.md``).
     integrator : "implicitfast" (default), "euler", "implicit" or "rk4".
     cone : friction cone, "elliptic" (default) or "pyramidal" (MuJoCo's default).
     impratio : frictional-to-normal constraint impedance ratio [-], in [0.1, 100] (default 3;

@@ -8,9 +8,9 @@ A scene file's optional ``[contact]`` table::
 
 Both are Coulomb coefficients, static = kinetic, in (0, 10]. **No friction given** (no table, or
 ``friction`` left out) means what the rocking model assumes: pivots that do not slide. Each
-engine then uses its own ``EngineSettings.friction`` (2 for pymunk, PyBullet and OpenSees, 1
-for MuJoCo and Drake: ``docs/engines.md``), high enough that the cases it is checked on do not
-slide, and a base that slides beyond ``max_sliding`` marks the run diverged. A friction given
+engine then uses its own ``EngineSettings.friction`` (listed in ``docs/engines/README.md``),
+high enough that the cases it is checked on do not slide, and a base that slides beyond the
+engine's ``max_sliding`` marks the run diverged. A friction given
 is physics: every engine uses exactly that value for every base contact pair (and
 ``beam_friction``, default ``friction``, for the beam on the column tops), and sliding is
 modelled, not an error.

@@ -43,6 +43,7 @@ from rockbench.testing import engine_params, needs_engine
 
 ENGINES = engine_params()
 RECORDS = __import__("pathlib").Path(__file__).resolve().parents[3] / "shared" / "records"
+needs_records = pytest.mark.skipif(not RECORDS.is_dir(), reason=f"no records at {RECORDS}")
 
 #: Engine settings for sliding runs (module docstring); every other setting is the default.
 SLIDING = {"mujoco": {"impedance": 0.999}}
@@ -238,6 +239,7 @@ def _record(name: str, t0: float, t1: float, scale: float) -> Record:
 
 
 @pytest.mark.slow
+@needs_records
 @pytest.mark.parametrize("engine", ENGINES)
 def test_sliding_block_under_records_matches_newmark(engine):
     """Chi-Chi TCU052-N (25-40 s: its near-fault pulse), mu = 0.2: out 212 mm and back to a
@@ -247,7 +249,7 @@ def test_sliding_block_under_records_matches_newmark(engine):
     for rec, final in ((_record("ChiChi1999_TCU052-N.AT2", 25.0, 40.0, 1.0), True),
                        (_record("IV1940_ElCentro_180.AT2", 0.0, 15.0, 2.0), False)):
         ref = sliding_response(rec, mu).summary
-        t, u = _slip(_squat(mu), rec, engine)
+        _, u = _slip(_squat(mu), rec, engine)
         assert np.abs(u).max() == pytest.approx(ref.max_abs_displacement, rel=0.05), rec.name
         if final:
             assert ref.slip_path < 12 * abs(ref.final_displacement)     # conditioned
@@ -320,7 +322,7 @@ def test_sliding_under_horizontal_and_vertical_motion_matches_newmark(engine):
     mu = 0.3
     h = RickerPulse(2.0 * mu * G, 0.5)
     v = RickerPulse(1.0 * mu * G, 0.5)
-    scene, ref, r = _pulse_run(mu, WithVertical(h, v), engine, ref_vertical=v)
+    _, ref, r = _pulse_run(mu, WithVertical(h, v), engine, ref_vertical=v)
     flat = sliding_response(h, mu).summary
     assert abs(flat.max_abs_displacement / ref.max_abs_displacement - 1) > 0.15   # it matters
     assert r.summary.status == "ok", r.summary.reason
@@ -354,3 +356,16 @@ def test_a_backend_without_vertical_motion_refuses_it_in_one_line():
     check_vertical(Flat, v)                                    # horizontal only: fine
     for name in ("pymunk", "mujoco", "pybullet", "opensees", "drake"):
         assert get_backend(name).vertical_motion
+
+
+def test_the_engines_page_states_each_default_friction():
+    """docs/engines/README.md's table of the friction each engine uses when the scene gives
+    none equals the engines' Settings."""
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "engines" /
+            "README.md").read_text(encoding="utf-8")
+    labels = {"pymunk": "pymunk", "mujoco": "MuJoCo", "pybullet": "PyBullet",
+              "opensees": "OpenSees", "drake": "Drake"}
+    for name, label in labels.items():
+        assert f"| {label} | {get_backend(name).Settings().friction!r} |" in page, name
