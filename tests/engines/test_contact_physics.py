@@ -199,6 +199,27 @@ def test_mujoco_pairs_get_the_scene_friction():
                    frozenset(("right", "beam")): (0.7, 0.7)}
 
 
+@needs_engine("drake")
+def test_drake_pairs_get_the_scene_friction():
+    b = get_backend("drake")(FRAME)
+    b.build()
+    insp = b._diagram.GetSubsystemByName("scene_graph").model_inspector()
+    plant = b._plant
+    mu = {}
+    for body in [plant.world_body()] + b._bodies:
+        for gid in plant.GetCollisionGeometriesForBody(body):
+            props = insp.GetProximityProperties(gid)
+            mu[insp.GetName(gid)] = props.GetProperty("material",
+                                                      "coulomb_friction").static_friction()
+    pair = lambda a, c: 2 * a * c / (a + c)  # noqa: E731 - Drake's combination
+    ground = [v for k, v in mu.items() if k.startswith("foundation")]
+    bases = [v for k, v in mu.items() if "_base_" in k]
+    tops = [v for k, v in mu.items() if "_top_" in k]
+    assert len(ground) == 2 and len(bases) == len(tops) == 4
+    assert {round(pair(g, c), 12) for g in ground for c in bases} == {0.4}
+    assert {round(pair(mu["beam_box"], c), 12) for c in tops} == {0.7}
+
+
 # --- sliding is physics with a scene friction -----------------------------------------------
 @pytest.mark.parametrize("engine", ENGINES)
 def test_sliding_without_a_scene_friction_is_still_a_divergence(engine):
