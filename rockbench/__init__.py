@@ -30,8 +30,8 @@ __version__ = "0.1.0"
 #: Public name -> the module (relative to this package) that defines it, imported on first use.
 _LAZY: dict[str, str] = {
     **dict.fromkeys(("Block", "Frame", "Devices", "Contact", "Scene", "GroundMotion",
-                     "RickerPulse", "Record", "load_scene", "save_scene", "load_record", "builtin_scenes",
-                     "make_pulse"),
+                     "RickerPulse", "Record", "load_scene", "save_scene", "load_record",
+                     "builtin_scenes", "make_pulse"),
                     ".scene"),
     "Result": ".result",
     **dict.fromkeys(("run", "info"), ".runner"),
