@@ -31,6 +31,10 @@ A backend is a subclass of :class:`Backend` registered by name in :mod:`rockbenc
   - ``precision_sweeps`` (default: the time step) - the work-precision curves: a tuple of
     (knob, values coarse to fine or None for the sweep's time steps, overrides held along it);
     an error-controlled integrator declares its own knob (e.g. an accuracy);
+  - ``vertical_motion`` (default False; True for every :class:`EngineBackend`) - the backend
+    moves its ground vertically too: a motion's ``vertical`` component (a GroundMotion of the
+    vertical ground acceleration [m/s^2], positive up, or None) enters its run. A backend
+    without it refuses such a motion in one line (:func:`check_vertical`), never ignores it;
 
 * ``_probe()`` - classmethod returning ``(True, version)`` or ``(False, why)``: whether the
   engine imports here (it may raise: an exception is a ``(False, why)``). Callers never call it:
@@ -56,13 +60,18 @@ Rigid-body engines subclass :class:`EngineBackend`, whose ``run`` is written onc
     [block] or [left column, beam, right column]), ``self.foundation``
     (:class:`~rockbench.engines.bodies.FoundationSpec`: ground and optional step) and
     ``self.poses0`` (initial poses on the exact mechanism), with contacts of friction
-    ``self.settings.friction`` and no restitution. Planar engines stay planar; 3-D engines keep
+    :attr:`EngineBackend.friction_pairs` (every base pair exactly the first coefficient, every
+    beam-on-column pair the second, whatever the engine's rule of combining two bodies'
+    coefficients: :func:`~rockbench.engines.contacts.body_frictions`) and no restitution. Planar engines stay planar; 3-D engines keep
     the bodies in the x-y plane with joints (not free bodies). Build native tendons/dampers only
     if ``native_devices`` is True and ``self.scene.has_devices``: a free-standing scene has no
     device elements.
-``_step(self, gravity_x, forces)``
-    Advance the world by ``settings.dt`` with gravity ``(gravity_x, -g)`` [m/s^2] (the ground
-    motion as a time-varying gravity vector, exact for rigid bodies) and the given
+``_step(self, gravity_x, forces, gravity_y=-g)``
+    Advance the world by ``settings.dt`` with gravity ``(gravity_x, gravity_y)`` [m/s^2]: the
+    ground motion as a time-varying gravity vector, ``(-u_g''(t), -(g + u_v''(t)))`` with
+    u_v'' the vertical ground acceleration (positive up), exact for rigid bodies in the
+    foundation's frame (the bodies' poses are relative to the moving ground; the loop passes
+    ``gravity_y`` only when the motion has a vertical component), and the given
     :class:`~rockbench.engines.devices.PointForce` list (device forces computed by the loop
     from the poses; empty for a free-standing scene) applied during the step.
 ``_state(self) -> ndarray (n_bodies, 6)``
@@ -97,13 +106,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ..constants import G
 from ..errors import BackendUnavailable, ParameterError, check_positive
 from ..result import Result
 from ..scene.scene import Scene
 from .bodies import body_specs, foundation_spec, initial_poses
 from .devices import DeviceGeometry, PointForce
 
-__all__ = ["Backend", "EngineBackend", "EngineSettings", "run_window"]
+__all__ = ["Backend", "EngineBackend", "EngineSettings", "run_window", "check_vertical",
+           "resolve_friction"]
 
 #: Backend class -> (available, version or reason): each probe runs once per process.
 _STATUS: dict[type, tuple[bool, str]] = {}
@@ -121,6 +132,7 @@ class Backend(abc.ABC):
     relative_cost: ClassVar[float] = 1.0
     contact_variants: ClassVar[tuple[dict[str, Any], ...]] = ()
     precision_sweeps: ClassVar[tuple] = (("dt", None, {}),)
+    vertical_motion: ClassVar[bool] = False
     #: The distribution that provides the engine (``rockbench engines``; metadata versions).
     package: ClassVar[str] = ""
 
@@ -134,6 +146,7 @@ class Backend(abc.ABC):
         if not isinstance(settings, self.Settings):
             raise ParameterError("settings", type(settings).__name__,
                                  f"a {self.Settings.__qualname__}")
+        settings = resolve_friction(scene, settings, overrides)
         self.scene = scene
         self.settings = settings
 
@@ -196,6 +209,44 @@ def _replace(settings, overrides: dict[str, Any]):
     vals = asdict(settings)
     vals.update(overrides)
     return type(settings)(**vals)
+
+
+def resolve_friction(scene: Scene, settings, overrides: dict[str, Any] | None = None):
+    """``settings`` with the scene's friction: unchanged when the scene gives none (the
+    engine's own ``friction``, the rocking model's non-sliding pivots) or when the settings have
+    no ``friction`` field; else with ``friction`` = the scene's ``contact.friction``.
+
+    An engine ``friction`` given together with a scene friction is refused (ParameterError
+    naming ``friction``): an override ``friction=...`` in ``overrides``, or a Settings object
+    whose friction is neither the engine's default nor the scene's value."""
+    mu = scene.contact.friction
+    names = {f.name for f in fields(settings)}
+    if mu is None or "friction" not in names:
+        return settings
+    default = type(settings)().friction
+    given = (overrides or {}).get("friction", settings.friction)
+    explicit = "friction" in (overrides or {}) or settings.friction not in (default, mu)
+    if explicit:
+        raise ParameterError("friction", given, "not set when the scene gives a friction",
+                             f"friction is the scene's [contact] friction ({mu:g}) for every "
+                             "engine: change contact.friction (--set contact.friction=...), "
+                             "not the engine setting")
+    if settings.friction == mu:
+        return settings
+    return _replace(settings, {"friction": mu})
+
+
+def check_vertical(backend: type, motion) -> None:
+    """Refuse, in one line, a ``motion`` with a vertical component (``motion.vertical`` not
+    None) for a backend class that cannot move its ground vertically (``vertical_motion``
+    False): a ParameterError naming the motion and the reason, never a run that ignores it."""
+    if motion is None or getattr(motion, "vertical", None) is None:
+        return
+    if not getattr(backend, "vertical_motion", False):
+        raise ParameterError("motion", motion.label() if hasattr(motion, "label") else motion,
+                             "a motion without a vertical component for backend "
+                             f"{backend.name!r}",
+                             f"{backend.name} cannot move its ground vertically")
 
 
 def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
@@ -267,12 +318,17 @@ class EngineSettings:
         :mod:`rockbench.limits`), the same grid as the analytic backend. Left at its default
         (1 ms), it follows a coarser ``dt`` (output_dt = dt): the one rule, for the Python API
         and the command line alike.
-    friction : Coulomb friction coefficient of every contact pair (the value the pair gets,
-        whatever the engine's combination rule), > 0.
+    friction : Coulomb friction coefficient [-] of every contact pair (the value the pair gets,
+        whatever the engine's combination rule), > 0, **used when the scene gives no friction**
+        (the rocking model's pivots that do not slide; each engine's default is in
+        ``docs/engines/README.md``). A scene's ``[contact] friction`` replaces it (then setting
+        it is refused: :func:`resolve_friction`), and its ``beam_friction`` applies to the beam
+        on the column tops (:attr:`EngineBackend.friction_pairs`).
     uplift_tol : |phi| / alpha above which the structure counts as uplifted (engine contacts
         are never perfectly rigid) [-], in (0, 1).
     max_penetration, max_sliding : a run whose contacts penetrate or slide more than this [m]
-        is reported ``diverged``.
+        is reported ``diverged`` (sliding only when the scene gives no friction: with a scene
+        friction sliding is the physics modelled, and ``Summary.max_sliding`` reports it).
     energy_gain_tol : relative growth of mechanical energy without input (free rocking) that
         marks a run ``diverged`` [-].
     """
@@ -315,13 +371,27 @@ class EngineBackend(Backend):
 
     Settings: ClassVar[type] = EngineSettings
     native_devices: ClassVar[bool] = False
+    vertical_motion: ClassVar[bool] = True
+
+    @property
+    def friction_pairs(self) -> tuple[float, float]:
+        """(base, beam) [-]: the Coulomb coefficient every base contact pair gets (a block's or
+        the columns' base on the foundation) and every beam-on-column pair gets. The scene's
+        ``contact.friction`` and ``beam_friction`` (default: friction) when it gives one, else
+        ``settings.friction`` for both."""
+        c = self.scene.contact
+        if c.given:
+            return float(c.friction), float(c.beam)
+        mu = float(self.settings.friction)
+        return mu, mu
 
     # --- primitives -------------------------------------------------------------------------
     @abc.abstractmethod
     def _build(self) -> None: ...
 
     @abc.abstractmethod
-    def _step(self, gravity_x: float, forces: list[PointForce]) -> None: ...
+    def _step(self, gravity_x: float, forces: list[PointForce],
+              gravity_y: float = -G) -> None: ...
 
     @abc.abstractmethod
     def _state(self) -> np.ndarray: ...
@@ -364,6 +434,7 @@ class EngineBackend(Backend):
         from .loop import device_geometry, finish, step_run
 
         t0, t_end = run_window(self.scene, motion, duration, phi0, settings=self.settings)
+        check_vertical(type(self), motion)
         ok, why = self.available()
         if not ok:
             raise BackendUnavailable(f"backend {self.name!r} is not available: {why}")

@@ -3,7 +3,7 @@ whose C step function can be called directly (pymunk's Chipmunk, MuJoCo).
 
 Through Python, one step of a three-body frame costs about 1 microsecond inside Chipmunk and
 several more in the calls around it, so a run spends most of its time in rockbench's loop.
-:func:`run_kernel` is that loop in numba - ground-motion gravity, device forces and the
+:func:`run_kernel` is that loop in numba - ground-motion gravity (horizontal and vertical), device forces and the
 fracture check, the overturn check, the engine's step, the state read, the output samples with
 their linear interpolation - calling the engine's exported C functions by address (found with
 ``ctypes`` in the engine's own library) on the world the adapter built. It returns to Python
@@ -169,15 +169,16 @@ def _mujoco_dampers(eng):
 
 
 @njit(cache=True)
-def run_kernel(kind, eng, gx, t_steps, grid, t_tol, states, sample_intact, state, prev, ls,
-               fall_p, fall_n, g, dt, dev, check_strain, n_stop):
+def run_kernel(kind, eng, gx, gy, t_steps, grid, t_tol, states, sample_intact, state, prev, ls,
+               fall_p, fall_n, dt, dev, check_strain, n_stop):
     """Run the loop of :func:`rockbench.engines.loop.step_run` for engine ``kind``
     (:data:`CHIPMUNK`, :data:`MUJOCO`; its data in ``eng``) from the state saved in ``ls``
     (:class:`LoopState`), ``state`` and ``prev`` (n_bodies, 6) until the run ends (returns 0),
     ``n_stop`` samples are written (1: the caller checks them and calls again), the structure
     overturns (2) or the state is not finite (3). ``dev``: :func:`~rockbench.engines.
     device_kernel.device_params` (empty without device forces to apply); MuJoCo's native
-    devices are ``eng[13][0]`` = 1."""
+    devices are ``eng[13][0]`` = 1. ``gx``, ``gy``: the gravity of every step [m/s^2]
+    (:func:`~rockbench.engines.loop.ground_gravity`: the horizontal and vertical ground motion)."""
     nb = state.shape[0]
     W = np.zeros((nb, 3))
     n_steps = gx.shape[0]
@@ -237,10 +238,11 @@ def run_kernel(kind, eng, gx, t_steps, grid, t_tol, states, sample_intact, state
                     if fx != 0.0 or fy != 0.0 or tau != 0.0:
                         _call_pdd(fp[6], bodies[j], fx, fy)
                         _call_pd(fp[7], bodies[j], tau)
-            _call_pdd(fp[0], space, gx[k], -g)
+            _call_pdd(fp[0], space, gx[k], gy[k])
             _call_pd(fp[1], space, dt)
         else:
             eng[5][0] = gx[k]
+            eng[5][2] = gy[k]
             if native and intact and eng[8].shape[0] > 0:
                 _mujoco_dampers(eng)
             qfrc = eng[6]

@@ -1,10 +1,14 @@
-"""Contact diagnostics measured from body poses only, the same way for every engine:
-penetration, sliding and opening of the contacts the analytic model assumes.
+"""Contacts, the same way for every engine: the friction coefficient each body gets so that
+every contact *pair* has exactly the scene's (:func:`body_frictions`), and the diagnostics
+measured from body poses only: penetration, sliding and opening of the contacts the analytic
+model assumes (:class:`ContactProbe`).
 
 Lengths in m (``docs/conventions.md``).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -12,7 +16,35 @@ from ..scene.scene import Scene
 from ..scene.structure import Frame
 from .bodies import BodySpec, body_specs
 
-__all__ = ["ContactProbe", "contact_diagnostics"]
+__all__ = ["ContactProbe", "contact_diagnostics", "body_frictions", "COMBINATION_RULES"]
+
+#: How engines combine two bodies' Coulomb coefficients mu1, mu2 into the pair's: "product"
+#: (Chipmunk/pymunk, Bullet) mu1 mu2; "harmonic" (Drake) 2 mu1 mu2 / (mu1 + mu2).
+COMBINATION_RULES = ("product", "harmonic")
+
+
+def body_frictions(base: float, beam: float, rule: str) -> tuple[float, float, float]:
+    """The coefficients [-] to give the foundation, the block or columns, and the beam, so that
+    under the engine's combination ``rule`` (:data:`COMBINATION_RULES`) a base pair (foundation
+    and column) gets exactly ``base`` and a beam-on-column pair exactly ``beam``.
+
+    * "product": columns and foundation sqrt(base), the beam beam / sqrt(base);
+    * "harmonic": with 1/c = 1/max(base, beam), the foundation 1 / (2/base - 1/c) and the beam
+      1 / (2/beam - 1/c) (both positive: 2/mu > 1/c for mu <= max).
+
+    With base == beam every body gets the same value (sqrt(mu) or mu). The beam's value
+    matters only where it touches the columns; the foundation's only where a column (or block)
+    stands on it."""
+    if rule not in COMBINATION_RULES:
+        raise ValueError(f"rule {rule!r}: one of {COMBINATION_RULES}")
+    if base == beam:                     # one value for every body (exactly, no round-off)
+        v = math.sqrt(base) if rule == "product" else float(base)
+        return v, v, v
+    if rule == "product":
+        r = math.sqrt(base)
+        return r, r, beam / r
+    inv_c = 1.0 / max(base, beam)
+    return 1.0 / (2.0 / base - inv_c), 1.0 / inv_c, 1.0 / (2.0 / beam - inv_c)
 
 
 def _corners(sp: BodySpec):

@@ -26,8 +26,12 @@ Contacts (``contact_model``):
 * ``"hydroelastic"``: compliant-hydroelastic boxes (modulus ``hydroelastic_modulus``) on rigid
   foundation boxes, the beam compliant too (measured in ``docs/engines/drake.md``).
 
-Friction: every geometry gets ``friction`` (static = dynamic); Drake combines two coefficients as
-2 mu1 mu2 / (mu1 + mu2), so each pair gets exactly ``friction``.
+Friction (static = dynamic): Drake combines two coefficients as 2 mu1 mu2 / (mu1 + mu2); the
+foundation, the columns and the beam get :func:`~rockbench.engines.contacts.body_frictions`
+("harmonic": mu each when one coefficient serves every pair), so that every base pair gets
+exactly the base friction and the beam on its columns the beam friction
+(:attr:`~rockbench.engines.base.EngineBackend.friction_pairs`: the scene's, else
+``settings.friction``).
 
 Solvers (``solver``):
 
@@ -44,8 +48,9 @@ Solvers (``solver``):
 Ground motion: the plant's gravity field cannot change in a Context (Drake 1.51's
 ``UniformGravityFieldElement`` is model data), so the ground motion enters as the generalized
 force m_i u_g-inertia on each body's x dof (``gravity_x`` times the mass: exactly what a
-horizontal gravity component does to a rigid body), through the plant's applied generalized
-force input port, together with the device forces.
+horizontal gravity component does to a rigid body) and, with a vertical ground motion,
+m_i (gravity_y + g) = -m_i u_v'' on its y dof (the plant's own gravity stays -g), through the
+plant's applied generalized force input port, together with the device forces.
 
 Devices: Drake has no tendon through four points (the scene's tendon tension acts on both its
 segments), so tendons and dampers are the shared point forces of
@@ -66,6 +71,7 @@ import numpy as np
 from ..constants import G
 from ..errors import check_choice, check_range
 from .base import EngineBackend, EngineSettings
+from .contacts import body_frictions
 from .devices import DAMPER_MODELS, PointForce, net_wrenches
 
 __all__ = ["DrakeBackend", "DrakeSettings", "SOLVERS", "CONTACT_MODELS"]
@@ -91,6 +97,9 @@ class DrakeSettings(EngineSettings):
         local error it keeps per step), in [1e-8, 1e-1]; used only by "cenic".
     dt : discrete step [s]; with "cenic", the interval at which ground motion and device forces
         are updated and the largest step CENIC takes.
+    friction : (inherited) Coulomb coefficient of every contact pair when the scene gives no
+        friction (default 1); a scene's ``[contact]`` friction replaces it
+        (``docs/engines/README.md``).
     contact_model : "point" (corner spheres, default) or "hydroelastic".
     stiffness : point-contact stiffness of a contact pair [N/m], in [1e5, 1e13] (Drake's
         default 1e6 sinks a tonnes-heavy column by centimetres).
@@ -188,13 +197,14 @@ class DrakeBackend(EngineBackend):
             contact_model="hydroelastic" if hydro else "point",
             adjacent_bodies_collision_filters=False), builder)
         plant.mutable_gravity_field().set_gravity_vector([0.0, -G, 0.0])
-        mu = CoulombFriction(cfg.friction, cfg.friction)
+        # the bodies' coefficients: foundation, columns, beam (Drake combines them harmonically)
+        mus = body_frictions(*self.friction_pairs, "harmonic")
 
-        def props(compliant_box: float | None = None, rigid: bool = False):
+        def props(compliant_box: float | None = None, rigid: bool = False, part: int = 1):
             p = ProximityProperties()
             # the pair's values: stiffnesses combine in series, dissipations as their mean
             AddContactMaterial(dissipation=cfg.dissipation, point_stiffness=2.0 * cfg.stiffness,
-                               friction=mu, properties=p)
+                               friction=CoulombFriction(mus[part], mus[part]), properties=p)
             if cfg.solver == "sap":
                 p.AddProperty("material", "relaxation_time", cfg.relaxation_time)
             if hydro and rigid:
@@ -217,12 +227,13 @@ class DrakeBackend(EngineBackend):
         for i, (xc, width, top) in enumerate(boxes):
             plant.RegisterCollisionGeometry(
                 world, RigidTransform([xc, top - 0.5 * thick, 0.0]),
-                Box(width, thick, 2.0 * depth), f"foundation{i}", props(rigid=True))
+                Box(width, thick, 2.0 * depth), f"foundation{i}", props(rigid=True, part=0))
 
         r = cfg.corner_radius
         frame = len(self.specs) == 3
         self._bodies, self._joints = [], []
         for j, sp in enumerate(self.specs):
+            part = 2 if frame and j == 1 else 1
             i_unit = sp.inertia / sp.mass
             body = plant.AddRigidBody(sp.name, SpatialInertia(
                 sp.mass, [0.0, 0.0, 0.0], UnitInertia(i_unit, i_unit, i_unit)))
@@ -231,7 +242,7 @@ class DrakeBackend(EngineBackend):
             if hydro:
                 plant.RegisterCollisionGeometry(
                     body, RigidTransform(), Box(2 * hw, 2 * hh, sp.depth), f"{sp.name}_box",
-                    props(compliant_box=min(hw, hh)))
+                    props(compliant_box=min(hw, hh), part=part))
             elif is_beam:
                 # the beam's contact box overhangs its body by _BEAM_MARGIN at each end (its
                 # mass and inertia are the body's): Drake resolves a sphere against a box poorly
@@ -241,7 +252,7 @@ class DrakeBackend(EngineBackend):
                 # overhang, measured on a squat frame)
                 plant.RegisterCollisionGeometry(
                     body, RigidTransform(), Box(2 * hw + 2 * _BEAM_MARGIN, 2 * hh, sp.depth),
-                    f"{sp.name}_box", props())
+                    f"{sp.name}_box", props(part=2))
             if not hydro and not is_beam:
                 ys = [-hh + r] + ([hh - r] if frame else [])
                 for y in ys:
@@ -288,12 +299,14 @@ class DrakeBackend(EngineBackend):
             self._integrator = None
 
     # --- stepping -----------------------------------------------------------------------------
-    def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
+    def _step(self, gravity_x: float, forces: list[PointForce], gravity_y: float = -G) -> None:
         tau = self._tau
         tau[:] = 0.0
         vi = self._vi
         if gravity_x != 0.0:
             tau[vi[:, 0]] = self._mass * gravity_x
+        if gravity_y != -G:             # the vertical ground motion, beyond the plant's -g
+            tau[vi[:, 1]] = self._mass * (gravity_y + G)
         if forces:
             w = net_wrenches(forces, self._state())
             tau[vi] += w

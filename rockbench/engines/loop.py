@@ -8,14 +8,17 @@ same Result, events, contact diagnostics and divergence verdicts as a stepped ru
 What a run does, once for every engine (``docs/architecture.md``):
 
 * time: :func:`~rockbench.engines.base.run_window`; steps of ``dt`` with gravity
-  ``(-u_g''(t + dt/2), -g)``; output samples on :func:`~rockbench.result.output_grid`,
+  ``(-u_g''(t + dt/2), -(g + u_v''(t + dt/2)))`` (:func:`ground_gravity`; u_v'' the motion's
+  vertical component, positive up, 0 without one); output samples on :func:`~rockbench.result.output_grid`,
   linearly interpolated between engine steps;
 * devices (frames with tendons/dampers, unless native): :class:`DeviceGeometry` point forces
   from the poses before every step; fracture when a tendon's strain reaches eps_f, after which
   no device force acts (native devices are removed by the adapter);
 * overturn: |phi| reaches the scene's fall angle (the run stops);
 * online divergence: a non-finite state, energy growth in free rocking (every step), contact
-  violations (probed every :data:`PROBE_CHUNK` samples), an exception from the engine;
+  violations (probed every :data:`PROBE_CHUNK` samples; sliding counts only when the scene
+  gives no friction: with a scene friction it is the physics modelled), an exception from the
+  engine;
 * :func:`finish`: contact diagnostics (:class:`ContactProbe`), events from the sampled motion
   (:mod:`rockbench.measure`), post-run divergence checks, the verdict rules of
   :mod:`rockbench.engines.verdicts` (collapse, a run that stopped early, a run that did not
@@ -51,7 +54,7 @@ from .verdicts import (_collapse, _energy_floor, _exceeded, _frozen, _judge_stop
                        _peak_energy_growth)
 
 __all__ = ["Stepped", "Outcome", "step_run", "finish", "SampleChecks", "device_geometry",
-           "impact_arguments", "PROBE_CHUNK", "DRIVE_CHUNKS"]
+           "impact_arguments", "ground_gravity", "PROBE_CHUNK", "DRIVE_CHUNKS"]
 
 #: Output samples probed together (vectorized) for the penetration / sliding divergence check.
 PROBE_CHUNK = 500
@@ -132,6 +135,22 @@ def device_geometry(backend) -> DeviceGeometry | None:
     return DeviceGeometry(scene, backend.specs, damper if damper in DAMPER_MODELS else "couple")
 
 
+def ground_gravity(motion, t_mid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The gravity (gravity_x, gravity_y) [m/s^2] of the engine steps at their midpoints
+    ``t_mid`` [s]: (-u_g''(t), -(g + u_v''(t))), the ground motion as the inertial force of the
+    foundation's frame, exact for rigid bodies (poses relative to the moving ground). u_v'':
+    ``motion.vertical``'s acceleration (positive up), else 0 (gravity_y exactly -g)."""
+    n = t_mid.size
+    if motion is None or not n:
+        return np.zeros(n), np.full(n, -G)
+    gx = -np.asarray(motion.acceleration(t_mid), dtype=float).reshape(n)
+    vertical = getattr(motion, "vertical", None)
+    if vertical is None:
+        return gx, np.full(n, -G)
+    av = np.asarray(vertical.acceleration(t_mid), dtype=float).reshape(n)
+    return gx, -(G + av)
+
+
 def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     """Step ``backend`` (an :class:`~rockbench.engines.base.EngineBackend` whose ``specs``,
     ``foundation`` and ``poses0`` are set) from ``t0`` to ``t_end`` [s] under ``motion`` (None:
@@ -164,18 +183,17 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
     # the time of every step's start, as the loop has always computed it (t0 + k dt), and the
     # ground motion's gravity at the step's midpoint, in one vectorized call
     t_steps = t0 + np.arange(1, n_steps + 1) * dt
-    if motion is not None and n_steps:
-        t_mid = np.concatenate(([t0], t_steps[:-1])) + 0.5 * dt
-        gx = -np.asarray(motion.acceleration(t_mid), dtype=float).reshape(n_steps)
-    else:
-        gx = np.zeros(n_steps)
+    t_mid = np.concatenate(([t0], t_steps[:-1]))[:n_steps] + 0.5 * dt
+    gx, gy = ground_gravity(motion, t_mid)
+    vertical = getattr(motion, "vertical", None) is not None
     states = np.empty((n_out, nb, 6))
     sample_intact = np.zeros(n_out, dtype=bool)
     native_report: list[tuple] = []
     out = Stepped(grid=grid, states=states[:0], intact=sample_intact[:0])
     checker = SampleChecks(cfg, specs, probe, crit, uplift_phi,
                             free=motion is None and devices is None,
-                            energy_floor=_energy_floor(reference_of(scene)))
+                            energy_floor=_energy_floor(reference_of(scene)),
+                            sliding=scene.contact.given)
     n = 0                              # samples written
     no_forces: tuple = ()
     backend.steps = 0
@@ -188,12 +206,12 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
         state = np.array(read(), dtype=float)
         kernel = backend._compiled_loop()
         if kernel is not None:
-            n = _drive(kernel, state=state, gx=gx, t_steps=t_steps, grid=grid, t0=t0,
+            n = _drive(kernel, state=state, gx=gx, gy=gy, t_steps=t_steps, grid=grid, t0=t0,
                        t_tol=t_tol, states=states, sample_intact=sample_intact,
                        intact=intact, fall=(fall_p, fall_n), devices=devices,
                        check_strain=check_strain, checker=checker, out=out, backend=backend)
             raise _Done
-        gx, t_steps = gx.tolist(), t_steps.tolist()     # Python floats: the per-step loop
+        gx, gy, t_steps = gx.tolist(), gy.tolist(), t_steps.tolist()  # Python floats
         gridl = grid.tolist()
         prev_t, prev = None, None
         t = t0
@@ -243,7 +261,7 @@ def step_run(backend, motion, t0: float, t_end: float, phi0: float) -> Stepped:
                     if native:
                         backend._remove_devices()
             ts = clock()
-            step(gx[k], forces)
+            step(gx[k], forces, gy[k]) if vertical else step(gx[k], forces)  # default: -g
             backend.wall_s += clock() - ts
             backend.steps += 1
             prev_t, prev = t, state
@@ -297,7 +315,7 @@ def _build(backend) -> None:
                              f"{backend.name} refused it: {detail[:300]}") from None
 
 
-def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact, intact,
+def _drive(kernel, *, state, gx, gy, t_steps, grid, t0, t_tol, states, sample_intact, intact,
            fall, devices, check_strain, checker, out, backend) -> int:
     """Run a compiled stepping loop (``backend._compiled_loop()``, the protocol of
     :func:`rockbench.engines.compiled_loop.run_kernel`) to the end of the run, with the sample
@@ -343,8 +361,8 @@ def _drive(kernel, *, state, gx, t_steps, grid, t0, t_tol, states, sample_intact
     try:
         while True:
             ts = clock()
-            code = kernel(gx, t_steps, grid, t_tol, states, sample_intact, state, prev, ls,
-                          fall[0], fall[1], G, backend.settings.dt, dev, bool(check_strain),
+            code = kernel(gx, gy, t_steps, grid, t_tol, states, sample_intact, state, prev, ls,
+                          fall[0], fall[1], backend.settings.dt, dev, bool(check_strain),
                           checker.checked + DRIVE_CHUNKS * PROBE_CHUNK)
             backend.wall_s += clock() - ts
             backend.steps = int(ls[L.STEPS])
@@ -391,7 +409,8 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     history with contact diagnostics, events (uplift, impacts with the effective eta, fracture,
     overturn), post-run divergence checks (penetration, sliding, energy gained between peaks
     after the ground motion), summary and cost. ``settings`` is the backend's Settings
-    (``uplift_tol``, ``max_penetration``, ``max_sliding``, ``energy_gain_tol``).
+    (``uplift_tol``, ``max_penetration``, ``max_sliding``, ``energy_gain_tol``); the sliding
+    tolerance applies only when the scene gives no friction (with one, sliding is physics).
 
     ``keep="summary"`` (what a map keeps: status and reason, verdict, peak, impacts, fracture,
     contact maxima): returns an :class:`Outcome` whose summary equals the full Result's field
@@ -480,7 +499,7 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
         if max_pen > cfg.max_penetration:
             status, reason = "diverged", (f"penetration {max_pen:.3g} m > max_penetration "
                                           f"{cfg.max_penetration:g} m")
-        elif max_slide > cfg.max_sliding:
+        elif max_slide > cfg.max_sliding and not scene.contact.given:
             status, reason = "diverged", (f"sliding {max_slide:.3g} m > max_sliding "
                                           f"{cfg.max_sliding:g} m")
         else:
@@ -496,7 +515,7 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
                 status, reason = _unmeasured(imp, cfg)
         if status == "ok":
             reason = _frozen(scene, motion, ref, tt, ph, intact.astype(bool), phi0, t0,
-                             uplift_phi)
+                             uplift_phi, slid=sl_all if scene.contact.given else 0.0)
             if reason is not None:
                 status = "invalid"
     elif status == "diverged" and n and not overturned:

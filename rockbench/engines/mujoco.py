@@ -17,8 +17,10 @@ dynamics: the joints allow no out-of-plane motion.
 Contacts are explicit ``<pair>`` elements (automatic collisions are off, so the columns never
 touch each other or the step they do not stand on): block/column bases on the ground plane (the
 right column on the step box of the asymmetric frame) and both column tops against the beam.
-Each pair gets exactly ``settings.friction`` (explicit pairs bypass MuJoCo's max-combination
-rule), condim 3, and the contact softness of the settings; no restitution (MuJoCo contacts bounce
+Each pair gets exactly its coefficient (explicit pairs bypass MuJoCo's max-combination rule):
+base pairs the base friction, the column tops against the beam the beam friction
+(:attr:`~rockbench.engines.base.EngineBackend.friction_pairs`: the scene's, else
+``settings.friction``), condim 3, and the contact softness of the settings; no restitution (MuJoCo contacts bounce
 only when ``solref`` is under-damped; the default is over-damped).
 
 Devices (``devices="native"``, the default)
@@ -98,7 +100,10 @@ class MujocoSettings(EngineSettings):
         a few milliseconds and the pivots slip 3 mm; at 0.5 the contacts bounce).
     impedance : solimp dmin = dmax [-], in [mjMINIMP, mjMAXIMP] = [1e-4, 0.9999] (MuJoCo clamps
         anything outside): the share of the contact's constraint force that is not regularized
-        away (MuJoCo's default 0.9-0.95 lets the pivots creep).
+        away (MuJoCo's default 0.9-0.95 lets the pivots creep). A scene that slides needs 0.999:
+        at 0.99 friction is regularized enough that a squat block (b/h = 1) on mu = 0.8 tips
+        and slides 23 % short of Newmark's sliding block, 3.3 % too far on mu = 0.2; at 0.999
+        within 0.4 % (``docs/engines/README.md``).
     integrator : "implicitfast" (default), "euler", "implicit" or "rk4".
     cone : friction cone, "elliptic" (default) or "pyramidal" (MuJoCo's default).
     impratio : frictional-to-normal constraint impedance ratio [-], in [0.1, 100] (default 3;
@@ -109,7 +114,9 @@ class MujocoSettings(EngineSettings):
     tolerance : solver tolerance [-] (relative improvement at which the solver stops), in
         [0, 1e-3] (at 1e300 the solver stops at once and the energy of a free-rocking block grew
         5000 % in 2 ms, measured).
-    friction : as every engine's, and >= mjMINMU = 1e-5 (MuJoCo clamps smaller values).
+    friction : as every engine's (used when the scene gives no friction; default 1), and
+        >= mjMINMU = 1e-5 (MuJoCo clamps smaller values). A scene's ``[contact]`` friction
+        replaces it (``docs/engines/README.md``).
     devices : "native" (default: MuJoCo tendons and joint damping) or "forces" (the shared
         point forces computed from the poses).
     damper : damper model, "distributed" (default), "couple" or "heel" (see the module and
@@ -304,14 +311,19 @@ class MujocoBackend(EngineBackend):
                                f'{_vec(c.x - sp.x, 0.0, c.y + c.half_height - sp.y)}"/>')
             out.append('    </body>')
         out.append('  </worldbody>')
+        mu_base, mu_beam = self.friction_pairs
+        if mu_beam < MJ_MINMU:       # (the base friction is the settings', checked there)
+            raise ParameterError("contact.beam_friction", mu_beam,
+                                 f">= mjMINMU = {MJ_MINMU:g} for mujoco (its smallest friction)")
         if frame:
-            pairs = [("left", "ground"), ("right", "step" if fd.step_x0 is not None else "ground"),
-                     ("left", "beam"), ("right", "beam")]
+            pairs = [("left", "ground", mu_base),
+                     ("right", "step" if fd.step_x0 is not None else "ground", mu_base),
+                     ("left", "beam", mu_beam), ("right", "beam", mu_beam)]
         else:
-            pairs = [(specs[0].name, "ground")]
-        mu, d = cfg.friction, cfg.impedance
+            pairs = [(specs[0].name, "ground", mu_base)]
+        d = cfg.impedance
         out.append('  <contact>')
-        for a, b in pairs:
+        for a, b, mu in pairs:
             out.append(f'    <pair geom1="{a}" geom2="{b}" condim="3" '
                        f'friction="{_vec(mu, mu, 0.005, 1e-4, 1e-4)}" '
                        f'solref="{_vec(cfg.timeconst, cfg.contact_dampratio)}" '
@@ -442,9 +454,10 @@ class MujocoBackend(EngineBackend):
             return run_kernel(MUJOCO, eng, *args)
         return loop
 
-    def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
+    def _step(self, gravity_x: float, forces: list[PointForce], gravity_y: float = -G) -> None:
         m, d = self.model, self.data
         self._gravity[0] = gravity_x
+        self._gravity[2] = gravity_y
         if self._damped:
             self._set_dampers()
         if not forces:

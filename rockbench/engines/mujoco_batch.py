@@ -15,8 +15,9 @@ import os
 
 import numpy as np
 
+from ..constants import G
 from ..errors import ParameterError
-from .loop import Diverged, SampleChecks, Stepped, device_geometry, finish
+from .loop import Diverged, SampleChecks, Stepped, device_geometry, finish, ground_gravity
 from .mujoco import MujocoBackend, MujocoSettings
 
 __all__ = ["run_batch", "batch_refusal", "VERDICT_CHUNK"]
@@ -51,7 +52,8 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
     Result the plain path (``rb.run(scene, m, engine="mujoco")``) gives, to within floating
     point: the ground motion enters as the open-loop generalized force m_i * (-u_g''(t +
     dt/2)) on every body's slide-x joint (``qfrc_applied``) instead of a horizontal gravity,
-    which is the same force summed in another order (tested against the plain path).
+    and a vertical component's m_i * (-u_v''(t + dt/2)) on its slide-z joint, which are the
+    same forces summed in another order (tested against the plain path).
 
     Raises ParameterError naming the reason when :func:`batch_refusal` refuses the scene
     (callers fall back to the plain path). ``duration`` [s] as in ``run`` (None: each motion's
@@ -67,7 +69,7 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
     import mujoco
     from mujoco import rollout
 
-    from .base import run_window
+    from .base import check_vertical, run_window
 
     cpu = time.process_time()
     backend = MujocoBackend(scene, settings, **overrides)
@@ -91,6 +93,7 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
     windows, groups = [], {}
     for i, mo in enumerate(motions):
         t0, t_end = run_window(scene, mo, duration, 0.0)
+        check_vertical(MujocoBackend, mo)
         n_steps = int(math.ceil((t_end - t0) / dt - 1e-9))
         windows.append((t0, t_end, n_steps))
         groups.setdefault(n_steps, []).append(i)
@@ -104,8 +107,10 @@ def run_batch(scene, motions, *, duration: float | None = None, settings=None,
             t0 = windows[i][0]
             t_steps = t0 + np.arange(1, n_steps + 1) * dt
             t_mid = np.concatenate(([t0], t_steps[:-1])) + 0.5 * dt
-            gx = -np.asarray(motions[i].acceleration(t_mid), dtype=float)
+            gx, gy = ground_gravity(motions[i], t_mid)
             ctrl[j][:, 0:3 * nb:3] = gx[:, None] * masses[None, :]
+            if getattr(motions[i], "vertical", None) is not None:   # beyond the model's -g
+                ctrl[j][:, 1:3 * nb:3] = (gy + G)[:, None] * masses[None, :]
         if nthread == 1:
             for j, i in enumerate(idx):
                 wall = time.perf_counter()
@@ -210,7 +215,7 @@ def _finish_batch(backend, motion, window, q, v, wall: float, version: str,
     out.steps, out.wall_s = last, wall * last / max(n_done, 1)
     checker = SampleChecks(cfg, backend.specs, ContactProbe(scene, backend.specs),
                             reference_of(scene).critical, cfg.uplift_tol * scene.alpha,
-                            free=False)
+                            free=False, sliding=scene.contact.given)
     try:
         checker.check(samples, out.intact, grid, len(samples), out)
     except Diverged as e:

@@ -12,8 +12,10 @@ Model (one 2-D model, ``ndm 2 / ndf 3``, built from the scene's body specs)
   foundation (the right column on the step of the asymmetric frame) and each column top against
   the beam soffit - carries ``springs`` node-to-node ``zeroLengthContact2D`` elements spread
   evenly over its width, corners included, normal (0, 1): compression-only penalty contact of
-  stiffness ``toe_stiffness / springs`` each, with Coulomb friction ``friction`` and a
-  tangential penalty ``tangential_ratio`` times the normal one. A lifted heel carries no
+  stiffness ``toe_stiffness / springs`` each, with Coulomb friction (the base friction on the
+  foundation, the beam friction under the beam:
+  :attr:`~rockbench.engines.base.EngineBackend.friction_pairs`, the scene's or else
+  ``friction``) and a tangential penalty ``tangential_ratio`` times the normal one. A lifted heel carries no
   force, normal or tangential (a horizontal spring that stays active while the heel is lifted
   drags it: eta +3.8 .. +5.0 %, measured). The lower node of each pair sits
   :data:`SEAT` = 1e-10 m above the upper one, so that every contact is closed from the first
@@ -29,8 +31,11 @@ Model (one 2-D model, ``ndm 2 / ndf 3``, built from the scene's body specs)
   every impact or every excursion (``docs/engines/opensees.md``).
 * **Ground motion.** The shared loop's per-step gravity ``gravity_x = -u_g''(t + dt/2)`` as a
   horizontal nodal load m gravity_x at each centre-of-mass node (the relative-motion
-  formulation of a uniform excitation: only these nodes have mass), in a ``Plain`` load pattern
-  re-created every step; gravity is a constant pattern.
+  formulation of a uniform excitation: only these nodes have mass), and with a vertical ground
+  motion the vertical load m (gravity_y + g) = -m u_v'', in a ``Plain`` load pattern
+  re-created every step; gravity is a constant pattern. The foundation nodes are fixed: the
+  model is the foundation's frame, so the compression-only contacts open and close as the
+  ground's vertical acceleration changes their load.
 * **Devices** (``devices="native"``, the default). Tendon j: a ``corotTruss`` from its
   foundation anchor F (rest position of the column's base centre) to its beam anchor T (rest
   position of the column's top centre, a node of the beam), tension-only elastic material
@@ -75,7 +80,7 @@ from .base import EngineBackend, EngineSettings
 from .devices import DAMPER_MODELS, DeviceGeometry, PointForce, net_wrenches
 
 __all__ = ["OpenseesBackend", "OpenseesSettings", "DAMPING_MODELS", "INTEGRATORS", "SEAT",
-           "MAX_ITERATIONS", "MIN_TOLERANCE"]
+           "MAX_ITERATIONS", "MIN_TOLERANCE", "ROCKING_TOLERANCE", "SLIDING_TOLERANCE"]
 
 #: Contact damping models: none; Rayleigh on the toes' committed stiffness; Rayleigh on mass.
 DAMPING_MODELS = ("none", "stiffness", "mass")
@@ -85,6 +90,10 @@ MAX_ITERATIONS = 10_000
 #: The smallest convergence tolerance [m]: the displacement-increment norm of a structure of
 #: metres cannot fall below round-off (1e-300 never converged: "diverged" at t = 0).
 MIN_TOLERANCE = 1e-12
+#: The Newton test's tolerance [m] by default: without a scene friction (no sliding is
+#: expected; the defaults measured in docs/engines/opensees.md), and with one (the contacts'
+#: friction limit resolved: see ``OpenseesSettings.tolerance``).
+ROCKING_TOLERANCE, SLIDING_TOLERANCE = 1e-8, 1e-10
 #: Time integrators (OpenSees ``Newmark gamma beta`` or ``HHT alpha``).
 INTEGRATORS = ("newmark", "hht")
 _DEVICE_MODES = ("native", "forces")
@@ -104,7 +113,9 @@ class OpenseesSettings(EngineSettings):
     ``docs/engines/opensees.md``.
 
     dt : time step [s] (default 1e-3).
-    friction : Coulomb coefficient of every contact [-] (default 2, as pymunk's).
+    friction : Coulomb coefficient of every contact [-] when the scene gives no friction
+        (default 2, as pymunk's). A scene's ``[contact]`` friction replaces it
+        (``docs/engines/README.md``).
     toe_stiffness : normal penalty stiffness of one interface [N/m] (split evenly over its
         springs), in [1e6, 1e15] (default 1e13: the beam's contact mode is annihilated every
         step; 1e11, the textbook order, lets the 175 t beam bounce off the column tops and the
@@ -126,9 +137,15 @@ class OpenseesSettings(EngineSettings):
     iterations : Newton iterations per increment, an integer in [1, :data:`MAX_ITERATIONS` =
         1e4] (default 25).
     tolerance : displacement-increment norm of convergence [m], in [:data:`MIN_TOLERANCE` =
-        1e-12, 1e-4] (default 1e-8; below round-off it never converges, above 1e-4 m = a tenth
-        of the smallest length of a scene Newton stops at its first iterate: 1e300 reported a
-        run ok).
+        1e-12, 1e-4], or None (default: 1e-8 when the scene gives no friction,
+        :data:`SLIDING_TOLERANCE` = 1e-10 when it gives one); below round-off it never
+        converges, above 1e-4 m = a tenth of the smallest length of a scene Newton stops at its
+        first iterate: 1e300 reported a run ok. A displacement test does not see the force
+        residual of the stiff contacts (1e-8 m on a 5e12 N/m tangential spring is 50 kN):
+        at 1e-8 a squat block on mu = 0.2-0.5 never slides (Newton stops before the contact
+        reaches its friction limit, the block sticks: 100 % short of Newmark's slip; 8 % short
+        at mu = 0.8); at 1e-10 to 1e-12 it slides within 0.003 % of Newmark
+        (``docs/engines/README.md``).
     halvings : how many times a non-converged increment is halved before the run is
         reported diverged, integer in [0, 10] (default 4: down to dt / 16).
     devices : "native" (default: corotational truss tendons removed at fracture, dampers per
@@ -153,7 +170,7 @@ class OpenseesSettings(EngineSettings):
     hht_alpha: float = 1.0
     member_ratio: float = 100.0
     iterations: int = 25
-    tolerance: float = 1e-8
+    tolerance: float | None = None
     halvings: int = 4
     devices: str = "native"
     damper: str = "distributed"
@@ -173,7 +190,8 @@ class OpenseesSettings(EngineSettings):
         check_range("hht_alpha", self.hht_alpha, 2.0 / 3.0, 1.0)
         check_range("member_ratio", self.member_ratio, 1.0, 1e6)
         check_int("iterations", self.iterations, 1, MAX_ITERATIONS)
-        check_range("tolerance", self.tolerance, MIN_TOLERANCE, 1e-4)
+        if self.tolerance is not None:
+            check_range("tolerance", self.tolerance, MIN_TOLERANCE, 1e-4)
         check_int("halvings", self.halvings, 0, 10)
         check_choice("devices", self.devices, _DEVICE_MODES)
         check_choice("damper", self.damper, DAMPER_MODELS)
@@ -259,7 +277,7 @@ class OpenseesBackend(EngineBackend):
         ops.constraints("Plain")
         ops.numberer("RCM")
         ops.system("BandGeneral")
-        ops.test("NormDispIncr", float(cfg.tolerance), int(cfg.iterations), 0)
+        ops.test("NormDispIncr", self._tolerance(), int(cfg.iterations), 0)
         ops.algorithm("Newton")
         if cfg.integrator == "newmark":
             ops.integrator("Newmark", float(cfg.gamma), float(cfg.beta))
@@ -267,6 +285,15 @@ class OpenseesBackend(EngineBackend):
             ops.integrator("HHT", float(cfg.hht_alpha))
         ops.analysis("Transient")
         self._last = self._read_state()
+
+    def _tolerance(self) -> float:
+        """The Newton test's tolerance in use [m] (``settings.tolerance``, or its default for
+        the scene: :data:`SLIDING_TOLERANCE` with a scene friction, else
+        :data:`ROCKING_TOLERANCE`)."""
+        tol = self.settings.tolerance
+        if tol is not None:
+            return float(tol)
+        return SLIDING_TOLERANCE if self.scene.contact.given else ROCKING_TOLERANCE
 
     def _interfaces(self) -> list[tuple[int | None, int, float, float, float]]:
         """(body below or None for the foundation, body above, y, x0, x1) of every contact
@@ -288,15 +315,17 @@ class OpenseesBackend(EngineBackend):
         ops, cfg = self._ops, self.settings
         n = int(cfg.springs)
         kn = cfg.toe_stiffness / n
+        mu_base, mu_beam = self.friction_pairs
         self._contacts = []
         tag = _CONTACT0
         for below, above, y, x0, x1 in self._interfaces():
+            mu = mu_base if below is None else mu_beam
             for x in np.linspace(x0, x1, n).tolist():
                 upper = self._satellite(above, x, y)
                 lower = (self._fixed(x, y + SEAT) if below is None
                          else self._satellite(below, x, y + SEAT))
                 ops.element("zeroLengthContact2D", tag, upper, lower, kn,
-                            kn * cfg.tangential_ratio, float(cfg.friction), "-normal", 0.0, 1.0)
+                            kn * cfg.tangential_ratio, float(mu), "-normal", 0.0, 1.0)
                 self._contacts.append(tag)
                 tag += 1
 
@@ -399,7 +428,7 @@ class OpenseesBackend(EngineBackend):
             ops.setNodeDisp(node, 3, th, "-commit")
 
     # --- stepping ---------------------------------------------------------------------------
-    def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
+    def _step(self, gravity_x: float, forces: list[PointForce], gravity_y: float = -G) -> None:
         ops = self._ops
         if self._dampers is not None:
             forces = list(forces) + self._dampers.forces(self._last)[0]
@@ -407,11 +436,13 @@ class OpenseesBackend(EngineBackend):
         if self._pattern:
             ops.remove("loadPattern", _MOTION)
             self._pattern = False
-        if gravity_x != 0.0 or wrench is not None:
+        vertical = gravity_y != -G      # the vertical ground motion, beyond gravity's pattern
+        if gravity_x != 0.0 or wrench is not None or vertical:
             ops.pattern("Plain", _MOTION, _MOTION)
+            ay = gravity_y + G if vertical else 0.0
             for i, (node, sp) in enumerate(zip(self._com, self.specs)):
                 fx, fy, tz = wrench[i] if wrench is not None else (0.0, 0.0, 0.0)
-                ops.load(node, sp.mass * gravity_x + fx, fy, tz)
+                ops.load(node, sp.mass * gravity_x + fx, sp.mass * ay + fy, tz)
             self._pattern = True
         self._advance(float(self.settings.dt), 0)
 
@@ -424,7 +455,7 @@ class OpenseesBackend(EngineBackend):
             raise NoConvergence(
                 f"OpenSees did not converge {self._ops.getTime():.6g} s into the run (increment "
                 f"{dt:.3g} s after {level} halvings of dt; settings iterations="
-                f"{self.settings.iterations}, tolerance={self.settings.tolerance:g} m)")
+                f"{self.settings.iterations}, tolerance={self._tolerance():g} m)")
         self.halved += 1
         self._advance(0.5 * dt, level + 1)
         self._advance(0.5 * dt, level + 1)

@@ -22,13 +22,17 @@ Foundation: static boxes (ground, and the step under the right column), so that 
 is box-box (Bullet's exact box-box detector, no rounded margins).
 
 Contacts and friction. Bullet MULTIPLIES the two bodies' lateral friction coefficients (and
-clamps the product at 10): every body and the foundation get sqrt(settings.friction), so that
-every pair has exactly ``settings.friction``. Restitution 0 on everything (also multiplied).
+clamps the product at 10): the foundation, the columns and the beam get
+:func:`~rockbench.engines.contacts.body_frictions` ("product": sqrt(mu) each when one
+coefficient serves every pair), so that every base pair has exactly the base friction and the
+beam on its columns the beam friction (:attr:`~rockbench.engines.base.EngineBackend.
+friction_pairs`: the scene's, else ``settings.friction``). Restitution 0 on everything (also multiplied).
 Friction anchors on. The contact breaking threshold, solver iterations, contact ERP and the
 optional explicit contact stiffness/damping are settings (defaults measured: see
 ``docs/engines/pybullet.md``).
 
-Ground motion: gravity (gravity_x, 0, -g) set before every step. Device forces (tendons,
+Ground motion: gravity (gravity_x, 0, gravity_y) set before every step (gravity_y = -(g + the
+vertical ground acceleration)). Device forces (tendons,
 dampers) from the shared machinery, applied with ``applyExternalForce(..., WORLD_FRAME)`` on
 the body link before every step (Bullet clears external forces after each step).
 
@@ -49,6 +53,7 @@ from ..constants import G
 from ..errors import ParameterError
 from ._quiet import quiet_import
 from .base import EngineBackend, EngineSettings
+from .contacts import body_frictions
 from .devices import DAMPER_MODELS, PointForce
 
 __all__ = ["PybulletBackend", "PybulletSettings"]
@@ -67,10 +72,11 @@ _BULLET_MAX_FRICTION = 10.0
 class PybulletSettings(EngineSettings):
     """PyBullet settings (see ``docs/engines/pybullet.md`` for the measurements behind them).
 
-    friction : the Coulomb coefficient every contact pair gets (each body gets its square root:
-        Bullet multiplies the two, and clamps the product at 10), in (0, 10]; default 2: from
-        0.6 up nothing slides more than 0.5 mm on the cross-engine cases, 2 keeps a factor of
-        about 3 over the largest demand (as pymunk's default).
+    friction : the Coulomb coefficient every contact pair gets when the scene gives no friction
+        (each body gets its square root: Bullet multiplies the two, and clamps the product at
+        10), in (0, 10]; default 2: from 0.6 up nothing slides more than 0.5 mm on the
+        cross-engine cases, 2 keeps a factor of about 3 over the largest demand (as pymunk's
+        default). A scene's ``[contact]`` friction replaces it (``docs/engines/README.md``).
     solver_iterations : constraint solver iterations per step (Bullet default 50), an integer in
         [1, :data:`MAX_ITERATIONS` = 1e4].
     contact_erp : error reduction parameter of contacts, in (0, 1]: the fraction of a contact's
@@ -83,8 +89,13 @@ class PybulletSettings(EngineSettings):
         OpenSees' toe stiffness).
     contact_breaking_threshold : distance [m] within which Bullet keeps (and creates) contact
         points (Bullet default 0.02 m biased the response; 1e-3 m), in (0, 0.05].
-    friction_anchor : keep the friction anchor of persistent contact points (removes pivot
-        creep), bool.
+    friction_anchor : keep the friction anchor of persistent contact points, True, False or
+        None (default: True when the scene gives no friction, False when it gives one). The
+        anchor removes pivot creep of a rocking structure (off: peak 1.1 % off, slip 0.3 mm),
+        but it is a position constraint to where a contact began: after a base has slid it
+        drags the base back towards it (a squat block on mu = 0.3 under a Ricker pulse ended
+        6.4 % short of Newmark's permanent slip with the anchor, 0.003 % without;
+        ``docs/engines/README.md``). With a scene friction, sliding is the physics modelled.
     solver : constraint solver, "si" (Bullet's sequential impulse, its default). The only
         choice: Bullet's MLCP solvers were measured and rejected (LCP_PGS: NaN on the first
         step; LCP_DANTZIG: bit-identical results on these scenes, and it prints to stdout).
@@ -110,7 +121,7 @@ class PybulletSettings(EngineSettings):
     contact_stiffness: float = 0.0
     contact_damping: float = 0.0
     contact_breaking_threshold: float = 1e-3
-    friction_anchor: bool = True
+    friction_anchor: bool | None = None
     solver: str = "si"
     virtual_mass_ratio: float = 1e-6
     damper: str = "distributed"
@@ -138,8 +149,9 @@ class PybulletSettings(EngineSettings):
         cbt = self.contact_breaking_threshold
         if not (isinstance(cbt, (int, float)) and 0.0 < cbt <= 0.05):
             raise ParameterError("contact_breaking_threshold", cbt, "in (0, 0.05] m")
-        if not isinstance(self.friction_anchor, (bool, np.bool_)):
-            raise ParameterError("friction_anchor", self.friction_anchor, "True or False")
+        if self.friction_anchor is not None \
+                and not isinstance(self.friction_anchor, (bool, np.bool_)):
+            raise ParameterError("friction_anchor", self.friction_anchor, "True, False or None")
         if self.solver not in _SOLVERS:
             raise ParameterError("solver", self.solver, f"one of {', '.join(_SOLVERS)}")
         vm = self.virtual_mass_ratio
@@ -221,8 +233,10 @@ class PybulletBackend(EngineBackend):
         if extra:
             pb.setPhysicsEngineParameter(physicsClientId=cid, **extra)
         pb.setGravity(0.0, 0.0, -G, physicsClientId=cid)
-        mu = math.sqrt(float(cfg.friction))   # Bullet multiplies the two coefficients
-        self._mu = mu
+        # Bullet multiplies the two coefficients of a pair: foundation, columns, beam
+        mu, mu_c, mu_b = body_frictions(*self.friction_pairs, "product")
+        self._anchor = (bool(cfg.friction_anchor) if cfg.friction_anchor is not None
+                        else not self.scene.contact.given)
 
         # foundation: static boxes, top of the ground at z = 0
         fd = self.foundation
@@ -241,7 +255,7 @@ class PybulletBackend(EngineBackend):
                                      physicsClientId=cid)
             pb.changeDynamics(bid, -1, lateralFriction=mu, restitution=float(cfg.restitution),
                               spinningFriction=0.0, rollingFriction=0.0,
-                              frictionAnchor=bool(cfg.friction_anchor),
+                              frictionAnchor=self._anchor,
                               contactProcessingThreshold=float(cfg.contact_breaking_threshold),
                               physicsClientId=cid)
             self._set_contact(bid, -1)
@@ -249,8 +263,9 @@ class PybulletBackend(EngineBackend):
 
         # bodies: fixed base, prismatic x, prismatic z, revolute about -y
         self._bodies = []
-        for sp, pose in zip(self.specs, self.poses0):
-            self._bodies.append(self._make_body(sp, pose))
+        frame = len(self.specs) == 3
+        for i, (sp, pose) in enumerate(zip(self.specs, self.poses0)):
+            self._bodies.append(self._make_body(sp, pose, mu_b if frame and i == 1 else mu_c))
 
     def _set_contact(self, bid: int, link: int) -> None:
         cfg = self.settings
@@ -259,7 +274,9 @@ class PybulletBackend(EngineBackend):
                                     contactDamping=float(cfg.contact_damping),
                                     physicsClientId=self._cid)
 
-    def _make_body(self, sp, pose) -> int:
+    def _make_body(self, sp, pose, mu: float) -> int:
+        """The planar joint chain of body ``sp`` at ``pose``, its box of lateral friction
+        ``mu`` [-] (the body's coefficient: Bullet multiplies it with the other body's)."""
         pb, cid, cfg = self._pb, self._cid, self.settings
         hw, hh, hd = sp.half_width, sp.half_height, 0.5 * sp.depth
         shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[hw, hd, hh],
@@ -295,10 +312,10 @@ class PybulletBackend(EngineBackend):
         pb.changeDynamics(bid, -1, linearDamping=0.0, angularDamping=0.0,
                           physicsClientId=cid)
         for link in range(3):
-            pb.changeDynamics(bid, link, jointDamping=0.0, lateralFriction=self._mu,
+            pb.changeDynamics(bid, link, jointDamping=0.0, lateralFriction=mu,
                               restitution=float(self.settings.restitution),
                               spinningFriction=0.0, rollingFriction=0.0,
-                              frictionAnchor=bool(cfg.friction_anchor),
+                              frictionAnchor=self._anchor,
                               contactProcessingThreshold=float(cfg.contact_breaking_threshold),
                               physicsClientId=cid)
             pb.setJointMotorControl2(bid, link, pb.VELOCITY_CONTROL, targetVelocity=0.0,
@@ -310,9 +327,9 @@ class PybulletBackend(EngineBackend):
         return bid
 
     # --- stepping -----------------------------------------------------------------------------
-    def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
+    def _step(self, gravity_x: float, forces: list[PointForce], gravity_y: float = -G) -> None:
         pb, cid = self._pb, self._cid
-        pb.setGravity(float(gravity_x), 0.0, -G, physicsClientId=cid)
+        pb.setGravity(float(gravity_x), 0.0, float(gravity_y), physicsClientId=cid)
         for f in forces:
             pb.applyExternalForce(self._bodies[f.body], 2, [f.fx, 0.0, f.fy],
                                   [f.px, 0.0, f.py], pb.WORLD_FRAME, physicsClientId=cid)

@@ -2,9 +2,11 @@
 
 Each body of the scene is one ``pymunk.Body`` with its true mass and moment of inertia (the
 beam's m rho^2 of the scene, not its box's) and one box ``Poly``; the foundation (a ground
-segment and, for the asymmetric frame, the step box) is static. Every shape gets friction
-sqrt(mu) (pymunk multiplies a pair's coefficients) and no elasticity. Ground motion is the
-shared time-varying gravity. Tendons and dampers are the shared
+segment and, for the asymmetric frame, the step box) is static. pymunk multiplies a pair's
+coefficients: the shapes get :func:`~rockbench.engines.contacts.body_frictions` ("product":
+sqrt(mu) each when one coefficient serves every pair), so that every base pair has exactly
+the base friction and the beam on the columns the beam friction; no elasticity. Ground motion
+(horizontal and vertical) is the shared time-varying gravity. Tendons and dampers are the shared
 :class:`rockbench.engines.devices.DeviceGeometry` forces (tendon elongation = base opening + top
 opening, exactly), summed into one force and one torque per body before every step; pymunk's
 own ``DampedSpring`` is not used (a straight spring from the foundation to the beam would be up
@@ -23,6 +25,7 @@ import numpy as np
 from ..constants import G
 from ..errors import ParameterError, check_int
 from .base import EngineBackend, EngineSettings
+from .contacts import body_frictions
 from .devices import DAMPER_MODELS, PointForce, net_wrenches
 
 __all__ = ["PymunkBackend", "PymunkSettings", "MAX_ITERATIONS"]
@@ -42,8 +45,9 @@ class PymunkSettings(EngineSettings):
 
     dt : time step [s] (default 1e-3: every cross-engine bar met with a factor >= 2 to spare;
         5e-4 halves the errors at half the speed, 2e-3 fails the eta bar).
-    friction : Coulomb coefficient of every contact pair [-] (default 2: the results are
-        identical from 0.7 to 10; at 0.5 a hybrid frame slides by 4 cm).
+    friction : Coulomb coefficient of every contact pair [-] when the scene gives no friction
+        (default 2: the results are identical from 0.7 to 10; at 0.5 a hybrid frame slides by
+        4 cm). A scene's ``[contact]`` friction replaces it (``docs/engines/README.md``).
     iterations : solver iterations per step, an integer in [1, :data:`MAX_ITERATIONS` = 1e4]
         (default 30; pymunk's 10 leaves the three-body frame's impacts unconverged: eta off by
         0.9 %, 18 mm of slip).
@@ -128,8 +132,12 @@ class PymunkBackend(EngineBackend):
             shapes.append(box)
             space.add(body)
             self._bodies.append(body)
-        for s in shapes:
-            s.friction = float(np.sqrt(cfg.friction))  # pymunk multiplies the two coefficients
+        # pymunk multiplies the two coefficients of a pair: foundation, columns, beam
+        mu_g, mu_c, mu_b = body_frictions(*self.friction_pairs, "product")
+        n_static = len(shapes) - len(self.specs)
+        for k, s in enumerate(shapes):
+            beam = len(self.specs) == 3 and k - n_static == 1
+            s.friction = mu_g if k < n_static else (mu_b if beam else mu_c)
             s.elasticity = 0.0
         space.add(*shapes)
         self._space = space
@@ -158,8 +166,8 @@ class PymunkBackend(EngineBackend):
             return run_kernel(CHIPMUNK, eng, *args)
         return loop
 
-    def _step(self, gravity_x: float, forces: list[PointForce]) -> None:
-        self._c[0](self._cspace, (gravity_x, -G))
+    def _step(self, gravity_x: float, forces: list[PointForce], gravity_y: float = -G) -> None:
+        self._c[0](self._cspace, (gravity_x, gravity_y))
         if forces:
             # one force and one torque per body (Chipmunk clears them after every step)
             for body, (fx, fy, tau) in zip(self._bodies,

@@ -107,10 +107,18 @@ class _Remaining:
         return dict(self._m.describe(), t_start_s=self.t_start)
 
 
+#: Slip [m] of a contact point beyond which a structure that did not rotate still moved (a
+#: base that slid responded to the ground motion: it is not a frozen world). The contact probe's
+#: own contact tolerance, 1 mm.
+SLID = 1e-3
+
+
 def _frozen(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray, intact: np.ndarray,
-            phi0: float, t0: float, uplift_phi: float) -> str | None:
+            phi0: float, t0: float, uplift_phi: float, slid: float = 0.0) -> str | None:
     """Why a run that finished cleanly did not move when it had to (None if it moved or did not
-    have to): |phi - phi0| stayed within ``uplift_phi`` [rad] over the whole run while
+    have to): its contacts slid no more than :data:`SLID` (``slid``: the run's largest slip [m];
+    a base that slides instead of rocking, friction below its slenderness, moved) and
+    |phi - phi0| stayed within ``uplift_phi`` [rad] over the whole run while
 
     * free rocking from phi0 != 0: gravity accelerates the structure at phi'' (Eq. 17 at rest)
       and moves it by min(|phi0|, phi'' T^2 / 2) >= 10 ``uplift_phi`` within the run's T;
@@ -123,7 +131,7 @@ def _frozen(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray, intact: n
     if not phi.size:
         return None
     moved = float(np.max(np.abs(phi - phi0)))
-    if moved > uplift_phi:
+    if moved > uplift_phi or slid > SLID:
         return None
     span = float(t[-1] - t0)
     if motion is None:

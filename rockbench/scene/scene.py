@@ -15,14 +15,17 @@ Scenes are data: TOML files (built-in ones in ``rockbench/scenarios/``) of the f
     tendon_length = 8.5
     fracture_strain = 0.01      # or "none"
     damping = 25.3e6
+    [contact]                   # optional: Coulomb friction (rockbench.scene.contact)
+    friction = 0.4              # base contacts; left out: each engine's default, no sliding
+    beam_friction = 0.6         # frames only: the beam on its columns (default: friction)
 
 Every field, its unit, range and default: ``docs/scenes.md`` (generated from
 :mod:`rockbench.scene.schema`). A required field left out is refused (one line naming it);
 ``preset = "paper"`` takes the fields left out from the paper's frame on purpose.
 
 Any parameter can be overridden with ``key=value`` strings (``span=9``, ``structure.span=9``,
-``devices.fracture_strain=none``, ``fall_angle=1.2``). :func:`load_scene` is the one resolver of
-a scene argument: a built-in name, a path, or a :class:`Scene` (returned as it is, or with the
+``devices.fracture_strain=none``, ``fall_angle=1.2``, ``contact.friction=0.3``).
+:func:`load_scene` is the one resolver of a scene argument: a built-in name, a path, or a :class:`Scene` (returned as it is, or with the
 overrides applied). :meth:`Scene.to_toml` and :func:`save_scene` write a scene back.
 """
 
@@ -40,6 +43,7 @@ from typing import Any, Mapping
 
 from ..errors import ParameterError, SceneError, check_range
 from ..limits import LIMITS, check_in_limit, override_hint
+from .contact import Contact
 from .devices import Devices
 from .schema import fields_of, required
 from .structure import Block, Frame
@@ -63,6 +67,9 @@ class Scene:
     fall_angle : float or None
         |phi| [rad] at which a run reports ``overturned`` (and may stop). None: for each rocking
         direction min(pi/2, 0.98 x the mechanism's geometric limit).
+    contact : Contact
+        The contacts' Coulomb friction (:class:`~rockbench.scene.contact.Contact`); the default
+        gives none (each engine's own, the rocking model's non-sliding pivots).
     """
 
     structure: Block | Frame
@@ -70,6 +77,7 @@ class Scene:
     name: str = "custom"
     description: str = ""
     fall_angle: float | None = None
+    contact: Contact = Contact()
 
     def __post_init__(self) -> None:
         if not isinstance(self.structure, (Block, Frame)):
@@ -82,6 +90,14 @@ class Scene:
         if self.fall_angle is not None:
             object.__setattr__(self, "fall_angle", check_range(
                 "fall_angle", self.fall_angle, 0.0, math.pi, lo_open=True))
+        if not isinstance(self.contact, Contact):
+            raise ParameterError("contact", type(self.contact).__name__,
+                                 "a rockbench.scene.contact.Contact")
+        if self.contact.beam_friction is not None and not isinstance(self.structure, Frame):
+            raise ParameterError("contact.beam_friction", self.contact.beam_friction,
+                                 "absent for a block",
+                                 "beam_friction is the beam on its columns' top corners, "
+                                 "frames only")
         _check_ranges(self.structure, self.devices)
         if isinstance(self.structure, Frame):
             from .mechanism import geometric_limit, mechanism
@@ -106,6 +122,12 @@ class Scene:
     def p(self) -> float:
         """Frequency parameter of the taller column [rad/s]."""
         return self.structure.p
+
+    @property
+    def friction(self) -> float | None:
+        """The Coulomb friction coefficient [-] of the base contacts the scene gives
+        (``contact.friction``), or None: not given (each engine's default)."""
+        return self.contact.friction
 
     @property
     def is_frame(self) -> bool:
@@ -139,6 +161,8 @@ class Scene:
             d["devices"] = self.devices.to_dict()
         if self.fall_angle is not None:
             d["fall_angle"] = self.fall_angle
+        if self.contact.given:
+            d["contact"] = self.contact.to_dict()
         return d
 
     def to_toml(self) -> str:
@@ -158,6 +182,11 @@ class Scene:
             lines += ["", "[devices]"]
             lines += [f"{f.name} = " + ('"none"' if dv[f.name] is None else _toml_num(dv[f.name]))
                       for f in fields_of("devices")]
+        if self.contact.given:
+            ct = self.contact.to_dict()
+            lines += ["", "[contact]"]
+            lines += [f"{f.name} = {_toml_num(ct[f.name])}" for f in fields_of("contact")
+                      if f.name in ct]
         return "\n".join(lines) + "\n"
 
     @classmethod
@@ -170,9 +199,10 @@ class Scene:
         """
         if not isinstance(data, Mapping):
             raise SceneError(f"{source}: a scene is a table of keys (name, description, "
-                             f"[structure], [devices], fall_angle), not {type(data).__name__}")
+                             f"[structure], [devices], [contact], fall_angle), not "
+                             f"{type(data).__name__}")
         allowed = {"kind", "name", "version", "description", "structure", "devices",
-                   "fall_angle", "preset"}
+                   "fall_angle", "preset", "contact"}
         if data.get("kind", "scene") != "scene":
             raise SceneError(f"{source}: kind = {data['kind']!r}: not a scene file (a scene "
                              "file has kind = \"scene\" or no kind)")
@@ -240,9 +270,17 @@ class Scene:
         _check_required(f"{source} [structure]", st, kind)
         _check_values(kind, st)       # ranges first: no arithmetic on a 1e-200 m column
         structure = cls_(**st)
+        contact = Contact()
+        if data.get("contact") is not None:
+            if not isinstance(data["contact"], Mapping):
+                raise SceneError(f"{source}: [contact] must be a table (friction, "
+                                 f"beam_friction), got {data['contact']!r}")
+            ct = {k: v for k, v in data["contact"].items() if v is not None}
+            _check_keys(f"{source} [contact]", ct, Contact)
+            contact = Contact(**ct)
         return cls(structure=structure, devices=devices, name=str(data.get("name", "custom")),
                    description=str(data.get("description", "")),
-                   fall_angle=data.get("fall_angle"))
+                   fall_angle=data.get("fall_angle"), contact=contact)
 
     def replace(self, **changes: Any) -> "Scene":
         return replace(self, **changes)
@@ -432,6 +470,7 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any] | None) -
     frame_keys = {f.name for f in fields(Frame)} | {f.name for f in fields(Block)} | {"type"}
     beam = {"mass_ratio": "beam_mass", "beam_mass": "mass_ratio"}  # one replaces the other
     dev_keys = {f.name for f in fields(Devices)}
+    contact_keys = {f.name for f in fields(Contact)}
     if not isinstance(overrides, Mapping):
         raise ParameterError("overrides", overrides, "a dict of key=value scene overrides")
     for key, raw in overrides.items():
@@ -446,17 +485,19 @@ def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any] | None) -
             table, name = "devices", key
         elif key in frame_keys:
             table, name = "structure", key
-        elif key == "devices":
+        elif key in contact_keys:
+            table, name = "contact", key
+        elif key in ("devices", "contact"):
             table, name = "", key
         else:
-            raise SceneError(f"unknown scene parameter {key!r}; known: "
-                             f"{sorted(frame_keys | dev_keys | {'fall_angle', 'devices'})}")
+            known = frame_keys | dev_keys | contact_keys | {"fall_angle", "devices", "contact"}
+            raise SceneError(f"unknown scene parameter {key!r}; known: {sorted(known)}")
         if table == "":
-            if key == "devices" and value is None:
-                out["devices"] = None
+            if key in ("devices", "contact") and value is None:
+                out[key] = None
             else:
                 out[name] = value
-        elif table in ("structure", "devices"):
+        elif table in ("structure", "devices", "contact"):
             tbl = out.get(table) or {}
             if not isinstance(tbl, dict):
                 raise SceneError(f"[{table}] is {tbl!r}, not a table: cannot apply override "

@@ -24,7 +24,7 @@ __all__ = ["Field", "FIELDS", "fields_of", "required", "markdown"]
 class Field:
     """One key of a scene file.
 
-    table : "scene" (top level), "block", "frame" or "devices";
+    table : "scene" (top level), "block", "frame", "devices" or "contact";
     name : the key; unit : SI unit ("-" dimensionless, "" for text);
     limit : key of :data:`rockbench.limits.LIMITS` giving the range, or None (``valid`` says it);
     valid : the range in words when ``limit`` is None (or extra conditions besides it);
@@ -116,13 +116,21 @@ FIELDS: tuple[Field, ...] = (
           None, "tendon strain eps_f at which every tendon and damper fails at once (brittle)"),
     Field("devices", "damping", "N s/m", "damping", "0 = no dampers", None,
           "constant C of each of the two linear viscous dampers at the column heels"),
+    # --- contact ---------------------------------------------------------------------------------
+    Field("contact", "friction", "-", None, "(0, 10]",
+          "none: each engine's own (docs/engines/README.md), pivots that do not slide",
+          "Coulomb coefficient mu (static = kinetic) of the base contacts: a block's or the "
+          "columns' base corners on the foundation"),
+    Field("contact", "beam_friction", "-", None, "(0, 10]; frames only; needs friction",
+          "friction", "Coulomb coefficient of the beam on its columns' top corners"),
 )
 
-_TABLES = ("scene", "block", "frame", "devices")
+_TABLES = ("scene", "block", "frame", "devices", "contact")
 
 
 def fields_of(table: str) -> tuple[Field, ...]:
-    """The fields of ``table`` ("scene", "block", "frame" or "devices"), in order."""
+    """The fields of ``table`` ("scene", "block", "frame", "devices" or "contact"), in
+    order."""
     if table not in _TABLES:
         raise KeyError(table)
     return tuple(f for f in FIELDS if f.table == table)
@@ -183,6 +191,8 @@ tendon_stiffness = 30e6
 tendon_length = 8.0
 fracture_strain = 0.02         # or "none"
 damping = 5e6
+[contact]                      # optional; left out: no sliding (each engine's own friction)
+friction = 0.6
 ```
 
 Units are SI (m, kg, s, N, rad). **A field without a default is required**: a file that leaves
@@ -196,9 +206,27 @@ variable (see [errors.md](errors.md)).
 Python: `rb.load_scene(name | path | Scene, overrides)`, `rb.Scene(rb.Frame(...),
 rb.Devices(...))`, `scene.to_toml()`, `rb.save_scene(scene, path)` (a saved scene loads back
 equal). The command line changes any field with `--set KEY=VALUE` (`--set span=9`,
-`--set devices.fracture_strain=none`, `--set devices=none` removes the devices; setting
-`mass_ratio` replaces a `beam_mass` and the other way round).
+`--set devices.fracture_strain=none`, `--set devices=none` removes the devices,
+`--set contact.friction=0.3`, `--set contact=none` removes the friction; setting `mass_ratio`
+replaces a `beam_mass` and the other way round).
 """
+
+_CONTACT = """
+
+**No friction given** (no `[contact]` table) is the rocking model's assumption: pivots that do not
+slide. Each engine then uses its own default coefficient (its setting `friction`, listed in
+[engines/README.md](engines/README.md)), chosen high enough that the structures it is checked
+on do not slide, and a run whose contacts slide more than the engine's `max_sliding` setting is
+reported `diverged`. **A friction given** is
+physics: every engine gives every base contact pair exactly `friction` (and the beam on the
+column tops `beam_friction`, default `friction`), whatever its own rule of combining two
+bodies' coefficients; sliding is then modelled, not an error (a run is not marked for it, and
+its `max_sliding` reports the largest slip, [metrics.md](metrics.md)), and an engine setting
+`friction=...` on top of it is refused. The analytic rocking model never slides: where the
+scene's friction is below what its pivots need, `rockbench.validity` puts the case outside the
+model. Newmark's sliding block (`rockbench.analytic.sliding`) is the exact reference for a
+structure that slides without rocking ([sliding.md](sliding.md))."""
+
 
 _MODEL = """## What the model supports (and what it does not)
 
@@ -252,6 +280,7 @@ def markdown() -> str:
              + "\n\nA `[devices]` table has all four fields or is left out (a free-standing "
                "frame). Tendons only: `damping = 0`; dampers only: `tendon_stiffness = 0` (a "
                "`tendon_length` is still required, and unused).",
+             "## `[contact]`: friction (optional)\n\n" + _table("contact") + _CONTACT,
              "## The ranges\n\n" + _limits_table(),
              _MODEL]
     return "\n\n".join(p.strip("\n") for p in parts) + "\n"
