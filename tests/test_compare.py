@@ -240,7 +240,7 @@ def test_every_column_is_documented():
         assert re.search(rf"`{re.escape(col)}`", doc), f"{col} missing from docs/metrics.md"
     for col, text in {**METRIC_COLUMNS, **ETA_COLUMNS}.items():
         unit = text.split(",")[0]
-        assert unit in ("-", "s", "m"), f"{col}: unit {unit!r}"
+        assert unit in ("-", "s", "m", "s/s"), f"{col}: unit {unit!r}"
 
 
 # --- fracture (issue 14) -------------------------------------------------------------------

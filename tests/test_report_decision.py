@@ -169,3 +169,23 @@ def test_the_evidence_is_named_with_its_size_and_coverage():
     assert "default set" in text and "--full" in text
     assert "full set" in evidence_note(t, size="full")
     assert evidence_note(pd.DataFrame(), size="quick") == ""
+
+
+def test_the_analytic_model_is_a_row_of_the_decision_with_its_cost_and_validity():
+    """The decision covers models: the analytic model's row first (exact inside its validity,
+    at its measured cost), its sentence first, the ratio to the cheapest confirmed setting
+    computed from the table (0.0135 / 0.00135 = 10)."""
+    model = {"cpu_per_sim_s": 0.00135, "holds": "PGA <= mu g = 0.5 g",
+             "breaks": "PGA > 0.5 g: the base slides (outside the model)"}
+    tab = decision_table(_advice(), model=model)
+    assert tab.iloc[0]["engine"] == "analytic model"
+    assert tab.iloc[0]["within 2 %"].startswith("exact · 0.0014 CPU s/s")
+    assert tab.iloc[0]["breaks first at"].startswith("PGA > 0.5 g")
+    assert list(tab["engine"][1:]) == list(decision_table(_advice())["engine"])
+    words = decision_sentences(_advice(), "frame", model=model)
+    assert words[0].startswith("Inside the analytic model's validity (PGA <= mu g = 0.5 g)")
+    assert "10 times less than the cheapest confirmed" in words[0]
+    assert words[1:] == decision_sentences(_advice(), "frame")
+    dearer = dict(model, cpu_per_sim_s=0.027)
+    assert "2 times more than the cheapest" in decision_sentences(_advice(), "f",
+                                                                  model=dearer)[0]

@@ -83,7 +83,8 @@ __all__ = ["NUMBA_AVAILABLE", "NUMBA_ERROR", "simulate_compiled", "run_pulse_gri
 
 from .kernels import NUMBA_AVAILABLE, NUMBA_ERROR, numba  # noqa: F401
 from .kernels import (_A, _ANTI_EXT, _B, _BETA, _C, _D, _E3, _E5, _EV_NAMES, _M_ANTI, _M_NONE, _M_REC, _M_SYM, _NOUT, _TAB0, _NS, _O_ADV, _O_EXC, _O_FRAC, _O_INTACT, _O_MAXABS, _O_MODE, _O_NEV, _O_NFEV, _O_NIMP, _O_OVER, _O_PHI, _O_PHID, _O_STATUS, _O_STEPS, _O_T, _O_TFRAC, _O_TOVER, _O_TUPL, _O_UPL, _REASONS, _SYM_EXT, _XFAC)
-from .kernel_run import (_grid_parallel, _grid_serial, _run)
+from .kernel_grid import _grid_parallel, _grid_serial
+from .kernel_run import _run
 
 #: Columns of the frame returned by :func:`run_pulse_grid`, in order.
 MAP_COLUMNS = ("amplitude", "frequency", "pulse", "sign", "overturned", "exceeded_critical",

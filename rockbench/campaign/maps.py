@@ -114,7 +114,7 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
         why = whys[-1] if len(whys) == 1 else f"{whys[0]}; {whys[1]}"
         if full:
             path = measured / f"{lab}_{eng}_{fg[0]}x{fg[1]}.parquet"
-            if path.exists() and "lacks" not in whys[0]:      # stale: measure again
+            if path.exists() and getattr(whys[0], "kind", "") != "partial":  # not resumable
                 shutil.rmtree(path)
             df = run_map(sc, eng, store=path, keyed_by_code=False, adaptive=fg != mg,
                          **dict(axes, grid=fg), **run)

@@ -13,7 +13,7 @@ from ..report import campaign_page as P
 from ..report.conclusions import campaign_conclusion
 from ..sweep.executors import cpu_count
 
-__all__ = ["write_page"]
+__all__ = ["write_page", "model_row"]
 
 
 def _engine_versions() -> dict[str, str]:
@@ -44,6 +44,39 @@ def _hybrid(scenes, labels: dict[str, str]) -> dict[str, bool]:
     return out
 
 
+def model_row(t: Any, scene_word: str) -> dict[str, Any] | None:
+    """The analytic model's row of the decision for the decision's scene (``scene_word``, a
+    label of ``t.labels`` or a scene of the plan): its cost (the median of the speed table's
+    ``ref_cpu_per_sim_s`` [CPU s per simulated s], measured beside the engines) and where it
+    holds and ends by the one validity rule (:mod:`rockbench.validity`); None without a
+    measured cost."""
+    import pandas as pd
+
+    from ..constants import G
+    from ..scene import load_scene
+    from ..validity import friction_of, pga_limit
+
+    speed = t.speed
+    if speed is None or not len(speed) or "ref_cpu_per_sim_s" not in speed:
+        return None
+    cost = pd.to_numeric(speed["ref_cpu_per_sim_s"], errors="coerce").dropna()
+    if not len(cost):
+        return None
+    scenes = list(t.plan["scenes"])
+    pick = next((s for s in scenes if t.labels.get(s, s) == scene_word or s == scene_word),
+                scenes[0] if scenes else None)
+    if pick is None:
+        return None
+    scene = load_scene(pick)
+    mu, lim = friction_of(scene), pga_limit(scene) / G
+    given = ("the scene's friction" if scene.friction is not None
+             else "the engines' common default: the scene gives none")
+    return {"cpu_per_sim_s": float(cost.median()),
+            "holds": f"PGA <= mu g = {lim:.3g} g with mu = {mu:g} ({given}), no sliding "
+                     "onset along the run, contact kept",
+            "breaks": f"PGA > {lim:.3g} g: the base slides (outside the model)"}
+
+
 def write_page(t: Any, out: Path) -> Path:
     """Write ``out/index.html`` (and its figures under ``out/figures``) from a campaign's
     tables ``t``; return the page's path."""
@@ -60,8 +93,9 @@ def write_page(t: Any, out: Path) -> Path:
                                 hybrid=_hybrid(plan["scenes"], t.labels),
                                 noun="frames" if _all_frames(plan["scenes"]) else "structures")
     # the decision first (measured, CPU time), then the maps' agreement, then the evidence
+    model = model_row(t, scene_word)
     words = decision_sentences(choice["advice"], scene_word,
-                               next_steps=decision.next_steps if decision else None)
+                               next_steps=decision.next_steps if decision else None, model=model)
     lines = words + maps["words"] + lines
     sections = P.page_sections(t, lines, out / "figures", engine_versions=_engine_versions(),
                                files=list(t.files()))
@@ -85,7 +119,7 @@ def write_page(t: Any, out: Path) -> Path:
         choice["advice"], scene=scene_word, structure=plan.get("description", ""),
         structures=None if t.paper else structure_table(plan["scenes"]),
         agreement=maps["agreement"], eta_summary=t.eta_summary, breaks=choice.get("breaks"),
-        next_steps=decision.next_steps if decision else None,
+        next_steps=decision.next_steps if decision else None, model=model,
         notes=[n for n in [evidence_note(choice.get("tradeoff"),
                                          size=choice.get("evidence", "quick"),
                                          coverage=decision.coverage if decision else None,

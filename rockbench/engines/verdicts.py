@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..constants import G
+from ..constants import FALL_EXTENSION, G
 from ..scene.scene import Scene
 
 
@@ -50,7 +50,8 @@ def _judge_stopped(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray,
 
         sc = scene if (on or not scene.has_devices) else scene.replace(devices=None)
         rest = _Remaining(motion, t_j) if motion is not None else None
-        long = (max(float(motion.t_end) - t_j, 0.0) if motion is not None else 0.0) + 20.0
+        long = (max(float(motion.t_end) - t_j, 0.0) if motion is not None else 0.0) \
+            + FALL_EXTENSION
         try:
             r = simulate(sc, rest, duration=long, phi0=p, phidot0=pd,
                          reference=ref if sc is scene else None)

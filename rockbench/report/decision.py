@@ -24,7 +24,7 @@ from ..fates import ABSENT, ALMOST, CONFIRMED, FATES
 from ..result import as_float
 
 __all__ = ["decision_sentences", "decision_table", "decision_html", "evidence_note", "pct",
-           "tol_text"]
+           "tol_text", "model_sentence"]
 
 
 def pct(x: Any, digits: int = 2) -> str:
@@ -53,16 +53,37 @@ def _by_tolerance(advice: pd.DataFrame):
         yield float(tol), (g.sort_values("rank") if "rank" in g else g)
 
 
+def model_sentence(model: Mapping[str, Any], advice: pd.DataFrame | None) -> str:
+    """The analytic model's place in the decision: inside its validity (``model["holds"]``,
+    e.g. "PGA <= mu g = 1 g, no sliding onset, contact kept") it is the reference and costs
+    ``model["cpu_per_sim_s"]`` [CPU s per simulated s], compared with the cheapest confirmed
+    engine setting of the advice; outside it only the engines answer."""
+    cost = as_float(model.get("cpu_per_sim_s"))
+    text = (f"Inside the analytic model's validity ({model['holds']}) the analytic model is the "
+            f"exact reference at {_cost(cost)}")
+    if advice is not None and len(advice) and math.isfinite(cost) and cost > 0:
+        ok = advice[advice["status"].astype(str) == CONFIRMED]
+        c = pd.to_numeric(ok["cpu_per_sim_s"], errors="coerce").dropna()
+        if len(c):
+            r = float(c.min()) / cost
+            text += (f", {r:.3g} times less than the cheapest confirmed engine setting" if r >= 1
+                     else f", {1 / r:.3g} times more than the cheapest confirmed engine setting")
+    return text + ("; outside it (a base or beam that slides, a structure that leaves the "
+                   "ground) only the engines answer, and no engine is checked against it there.")
+
+
 def decision_sentences(advice: pd.DataFrame, scene: str, *,
-                       next_steps: Mapping[float, Mapping[str, Any] | None] | None = None
-                       ) -> list[str]:
+                       next_steps: Mapping[float, Mapping[str, Any] | None] | None = None,
+                       model: Mapping[str, Any] | None = None) -> list[str]:
     """One sentence per tolerance, rendered from the advice table: what to use on ``scene``,
     its cost and errors; or, when none meets it, which engine reaches it without being
     confirmed and why; "no engine reaches" only when none does; and what to run next
-    (``next_steps``)."""
-    out: list[str] = []
+    (``next_steps``). With ``model`` (:func:`model_sentence`), the analytic model's place
+    first."""
+    out: list[str] = [model_sentence(model, advice)] if model else []
     if advice is None or not len(advice):
-        return ["No engine besides the analytic reference ran: there is nothing to choose."]
+        return out + ["No engine besides the analytic reference ran: there is nothing to "
+                      "choose."]
     for tol, g in _by_tolerance(advice):
         t = tol_text(tol)
         st = g["status"].astype(str)
@@ -159,11 +180,14 @@ def _cell(r: Mapping[str, Any]) -> str:
 def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = None,
                    eta_summary: pd.DataFrame | None = None,
                    breaks: pd.DataFrame | None = None,
-                   scene: str | None = None) -> pd.DataFrame:
+                   scene: str | None = None,
+                   model: Mapping[str, Any] | None = None) -> pd.DataFrame:
     """One row per engine: its fate at each tolerance (a confirmed setting with its steady
     cost [CPU s per simulated s] and worst errors chosen / held out [%], or the fate's word
     with its closest error), then map agreement on ``scene``'s map (the cells that differ, the
     share, Cohen's kappa), the worst free-rocking eta error [%], and where it first breaks.
+    With ``model`` (``cpu_per_sim_s``, ``holds``, ``breaks``), a first row for the analytic
+    model: the reference inside its validity, at its cost, and where that validity ends.
     Values are display strings."""
     if advice is None or not len(advice):
         return pd.DataFrame()
@@ -198,6 +222,16 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
         if w:
             row["breaks first at"] = w
         rows.append(row)
+    if model:
+        cost = as_float(model.get("cpu_per_sim_s"))
+        first = {"engine": "analytic model"}
+        for tol, _ in _by_tolerance(advice):
+            first[f"within {tol_text(tol)}"] = (f"exact · {cost:.2g} CPU s/s · inside its "
+                                                "validity" if math.isfinite(cost) else
+                                                "exact · inside its validity")
+        if model.get("breaks"):
+            first["breaks first at"] = str(model["breaks"])
+        rows.insert(0, first)
     return pd.DataFrame(rows)
 
 
@@ -233,17 +267,19 @@ def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
                   eta_summary: pd.DataFrame | None = None, breaks: pd.DataFrame | None = None,
                   work_precision_html: str = "", notes: Sequence[str] = (),
                   structures: pd.DataFrame | None = None,
-                  next_steps: Mapping[float, Any] | None = None) -> str:
+                  next_steps: Mapping[float, Any] | None = None,
+                  model: Mapping[str, Any] | None = None) -> str:
     """The decision section: sentences, the per-engine table, the work-precision figure;
     ``notes``: lines under the table (e.g. :func:`evidence_note`); ``structures``: the fields
     of the scenes the report is about (``rockbench.campaign.plan.structure_table``), shown
-    collapsed under the "About" line."""
-    lead = decision_sentences(advice, scene, next_steps=next_steps)
+    collapsed under the "About" line; ``model``: the analytic model's row and sentence
+    (:func:`model_sentence`)."""
+    lead = decision_sentences(advice, scene, next_steps=next_steps, model=model)
     parts = ['<div id="decision">']
     # every engine's row first (the first screen of a small laptop holds it), then the
     # sentences, then what the cells mean
     tab = decision_table(advice, agreement=agreement, eta_summary=eta_summary, breaks=breaks,
-                         scene=scene)
+                         scene=scene, model=model)
     if len(tab):
         head = "".join(f"<th class=\"txt\">{escape(c)}</th>" for c in tab.columns)
         body = "".join("<tr>" + "".join(

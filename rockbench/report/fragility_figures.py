@@ -92,9 +92,9 @@ def plot_fragility(analysis: Mapping[str, Any], runs: pd.DataFrame, *,
         ax.set_ylim(-3, 103)
         ax.grid(alpha=0.3)
         ax.tick_params(labelsize=_FONT - 1)
-        ax.legend(fontsize=_FONT - 1, loc="lower right")
     for ax in axes[::ncol]:
         ax.set_ylabel("P(overturn) [%]", fontsize=_FONT)
+    F.legend_below(fig, fontsize=_FONT - 1, max_cols=2)     # never over the curves
     if title:
         fig.suptitle(title, fontsize=_FONT + 1)
     return fig
@@ -159,7 +159,7 @@ def plot_peak_stripes(runs: pd.DataFrame, *, title: str | None = None) -> Figure
     ax.tick_params(labelsize=_FONT - 1)
     ax.set_ylim(0, max(top * 1.45, 0.1))
     ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize=_FONT - 1, loc="center left", ncol=1)
+    F.legend_below(fig, fontsize=_FONT - 1)
     if title:
         ax.set_title(title + " (at the top: % of the runs overturned)", fontsize=_FONT + 1)
     return fig

@@ -462,10 +462,23 @@ def _check_cells(df: pd.DataFrame, n: int) -> pd.DataFrame:
     return pd.DataFrame(picks).reset_index(drop=True)
 
 
+class MapReuse(str):
+    """Why a measured map is (not) reused, in words, with its ``kind``: "absent", "unreadable",
+    "stale" (written for other inputs: measure it again from scratch), "partial" (some cells
+    missing: a run resumes it), "unverified" (a cell re-run now disagrees) or "reused"."""
+
+    kind: str
+
+    def __new__(cls, text: str, kind: str) -> MapReuse:
+        obj = super().__new__(cls, text)
+        obj.kind = kind
+        return obj
+
+
 def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
               amplitude: Any, frequency: Any, pulses: str | Sequence[str] = "all",
               tail: float | None = None, check: int = 4,
-              rtol: float = VERIFY_RTOL) -> tuple[pd.DataFrame | None, str]:
+              rtol: float = VERIFY_RTOL) -> tuple[pd.DataFrame | None, MapReuse]:
     """A measured map (a store written with ``keyed_by_code=False``) if it can be trusted on
     this code and machine: written for the same scene, engine version, default settings and
     run length, complete for the grid, and reproduced at ``check`` cells re-run now (verdicts,
@@ -474,25 +487,27 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
     path = Path(store)
     meta = path / "_inputs.json"
     if not meta.is_file():
-        return None, f"no measured map at {path}"
+        return None, MapReuse(f"no measured map at {path}", "absent")
     from ..scene.scene import load_scene
 
     sc = load_scene(scene)
     want = store_inputs(sc, str(scene), engine, {}, "", tail, keyed_by_code=False)
     old = read_inputs(path)
     if isinstance(old, str):
-        return None, f"the measured map {path.name} has an unreadable {meta.name} ({old})"
+        return None, MapReuse(f"the measured map {path.name} has an unreadable {meta.name} "
+                              f"({old})", "unreadable")
     diff = [k for k in want if old.get(k) != want[k]]
     if diff:
-        return None, (f"the measured map {path.name} was written for other inputs "
-                      f"({', '.join(diff)} differ)")
+        return None, MapReuse(f"the measured map {path.name} was written for other inputs "
+                              f"({', '.join(diff)} differ)", "stale")
     cells = map_cells(grid=grid, amplitude=amplitude, frequency=frequency, pulses=pulses)
     df = load_map(path)
     keys = {(p, int(s), round(float(a), 9), round(float(w), 9))
             for p, s, a, w in zip(df["pulse"], df["sign"], df["amplitude"], df["frequency"])}
     missing = [c for c in cells if (c[0], c[1], round(c[2], 9), round(c[3], 9)) not in keys]
     if missing:
-        return None, f"the measured map {path.name} lacks {len(missing)} of {len(cells)} cells"
+        return None, MapReuse(f"the measured map {path.name} lacks {len(missing)} of "
+                              f"{len(cells)} cells", "partial")
     df = tidy_map(df)
     keep = {(c[0], c[1], round(c[2], 9), round(c[3], 9)) for c in cells}
     df = df[[(p, int(s), round(a, 9), round(w, 9)) in keep for p, s, a, w in
@@ -510,18 +525,19 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
                 f"W={r.frequency:.4g}")
         for c in ("status", "overturned", "exceeded_critical", "fractured", "n_impacts"):
             if getattr(r, c) != getattr(r, c + "_now"):
-                return None, (f"the measured map {path.name} does not reproduce: at {cell} "
-                              f"{c} was {getattr(r, c)}, is {getattr(r, c + '_now')} now")
+                return None, MapReuse(f"the measured map {path.name} does not reproduce: at "
+                                      f"{cell} {c} was {getattr(r, c)}, is "
+                                      f"{getattr(r, c + '_now')} now", "unverified")
         a, b = r.max_abs_phi_over_alpha, r.max_abs_phi_over_alpha_now
         d = abs(a - b) / max(abs(a), 1e-12)
         worst = max(worst, d)
         if not d <= rtol:
-            return None, (f"the measured map {path.name} does not reproduce: at {cell} max "
-                          f"|phi|/alpha was {a:.9g}, is {b:.9g} now")
+            return None, MapReuse(f"the measured map {path.name} does not reproduce: at {cell} "
+                                  f"max |phi|/alpha was {a:.9g}, is {b:.9g} now", "unverified")
     df.attrs.update(scene=sc.name, engine=engine, method="", reused=len(df))
-    return df, (f"measured earlier ({len(df)} cells, {want['engine_version']}), "
-                f"reproduced now at {len(m)} re-run cells (largest relative difference in "
-                f"max |phi|/alpha {worst:.1e})")
+    return df, MapReuse(f"measured earlier ({len(df)} cells, {want['engine_version']}), "
+                        f"reproduced now at {len(m)} re-run cells (largest relative difference "
+                        f"in max |phi|/alpha {worst:.1e})", "reused")
 
 
 def _default_method() -> str:
