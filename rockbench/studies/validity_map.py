@@ -50,7 +50,7 @@ import pandas as pd
 
 from ..errors import ParameterError
 
-__all__ = ["validity_map", "classify_cell", "relative_spread", "default_axes", "REGIONS",
+__all__ = ["validity_map", "engines_to_run", "classify_cell", "relative_spread", "default_axes", "REGIONS",
            "VALIDITY_COLUMNS", "DEFAULT_ENGINES", "PHI_FLOOR", "SLIDING_FLOOR"]
 
 #: The regions of a validity map, in the order of the figure's legend.
@@ -213,7 +213,7 @@ def _axis(values: Any, name: str) -> np.ndarray:
     return v
 
 
-def _engines(engines: Any) -> list[str]:
+def engines_to_run(engines: Any) -> list[str]:
     """The engines to run outside the model: ``engines`` (names; ParameterError naming
     ``engines`` for an unknown one or the analytic reference) or, with None, those of
     :data:`DEFAULT_ENGINES` installed here; engines not installed are left out."""
@@ -265,7 +265,7 @@ def validity_map(scene: Any, *, shape: str = "symmetric", sign: int = 1, A: Any 
     da, dw = default_axes(scene)
     As = _axis(da if A is None else A, "A")
     Ws = _axis(dw if W is None else W, "W")
-    names = _engines(engines)
+    names = engines_to_run(engines)
     settings = {k: dict(v or {}) for k, v in (settings or {}).items()}
     bad = [k for k in settings if k not in names]
     if bad:
