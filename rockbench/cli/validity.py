@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from .common import (add_engine_option, add_quiet_option, arg_count, arg_key_value, arg_number,
-                     arg_sign, engine_names, load_scene_from, output_folder, print_json,
+                     engine_names, load_scene_from, output_folder, print_json,
                      write_atomic)
 from ..errors import ParameterError
 
@@ -34,11 +34,12 @@ def add_validity_command(sub) -> None:
                    help="override a scene parameter (e.g. contact.friction=0.3)")
     p.add_argument("--shape", choices=("symmetric", "antisymmetric"), default="symmetric",
                    help="Ricker pulse shape (default symmetric)")
-    p.add_argument("--sign", type=arg_sign, default=1, help="pulse sign, 1 or -1 (default 1)")
+    p.add_argument("--sign", type=int, choices=(1, -1), default=1,
+                   help="pulse sign (default 1: the pulse as printed in the paper)")
     p.add_argument("--vertical", type=arg_number, default=0.0, metavar="RATIO",
                    help="peak vertical over peak horizontal ground acceleration, in phase, "
                         "0 to 3 (default 0: none)")
-    add_engine_option(p, "pymunk and mujoco, those installed; they run only outside the model")
+    add_engine_option(p, "the fast engines installed; they run only outside the model")
     p.add_argument("--grid", type=arg_count, default=8, metavar="N",
                    help=f"N x N cells, 1 <= N <= {MAX_GRID} (default 8): A from 0.5 to "
                         "max(8, 1.5 mu / tan alpha), W from 1 to 10")

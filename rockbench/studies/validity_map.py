@@ -51,14 +51,20 @@ import pandas as pd
 from ..errors import ParameterError
 
 __all__ = ["validity_map", "engines_to_run", "classify_cell", "relative_spread", "default_axes", "REGIONS",
-           "VALIDITY_COLUMNS", "DEFAULT_ENGINES", "PHI_FLOOR", "SLIDING_FLOOR"]
+           "VALIDITY_COLUMNS", "default_engines", "PHI_FLOOR", "SLIDING_FLOOR"]
 
 #: The regions of a validity map, in the order of the figure's legend.
 REGIONS = ("model", "agree", "disagree", "diverged")
 
-#: The engines a validity map runs outside the model by default (those installed here): the
-#: fast ones, so that a report's 8 x 8 map costs seconds, not minutes.
-DEFAULT_ENGINES = ("pymunk", "mujoco")
+def default_engines() -> list[str]:
+    """The engines a validity map runs outside the model by default: the installed ones whose
+    backend declares itself ``fast`` (:class:`rockbench.engines.base.Backend`), so that an
+    8 x 8 map costs seconds, not minutes."""
+    from ..engines import available_backends, get_backend
+    from ..runner import REFERENCE
+
+    return [e for e in available_backends() if e != REFERENCE and get_backend(e).fast]
+
 
 #: Floor of the median peak |phi| [rad] in :func:`relative_spread` (a block barely rocking:
 #: engines within 1 mrad of each other agree).
@@ -215,12 +221,14 @@ def _axis(values: Any, name: str) -> np.ndarray:
 
 def engines_to_run(engines: Any) -> list[str]:
     """The engines to run outside the model: ``engines`` (names; ParameterError naming
-    ``engines`` for an unknown one or the analytic reference) or, with None, those of
-    :data:`DEFAULT_ENGINES` installed here; engines not installed are left out."""
+    ``engines`` for an unknown one or the analytic reference) or, with None,
+    :func:`default_engines`; engines not installed are left out."""
     from ..engines import available_backends
     from ..runner import REFERENCE, resolve_engines
 
-    names = list(DEFAULT_ENGINES) if engines is None else resolve_engines(engines)
+    if engines is None:
+        return default_engines()
+    names = resolve_engines(engines)
     if not names or REFERENCE in names:
         raise ParameterError("engines", engines, "one or more engine names other than the "
                                                  f"analytic reference {REFERENCE!r}")
@@ -238,8 +246,8 @@ def validity_map(scene: Any, *, shape: str = "symmetric", sign: int = 1, A: Any 
 
     ``A`` [-], ``W`` [-]: the grid's axes (default :func:`default_axes`, 8 x 8);
     ``shape`` ("symmetric" | "antisymmetric"), ``sign`` (1 | -1), ``vertical_ratio`` [-] in
-    [0, 3]: the pulse; ``engines``: run outside the model (default :data:`DEFAULT_ENGINES`,
-    the installed ones); ``settings``: engine name -> setting overrides (default: each
+    [0, 3]: the pulse; ``engines``: run outside the model (default :func:`default_engines`,
+    the fast ones installed); ``settings``: engine name -> setting overrides (default: each
     engine's defaults); ``tolerance`` [-]: of :func:`classify_cell`; ``store``: a folder,
     the cells kept under ``<store>/<fingerprint>/validity`` and reused; ``workers``: local
     processes (1: in this process; default: the cores); ``tail`` [s]: the run's free rocking
