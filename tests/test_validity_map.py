@@ -223,3 +223,53 @@ def test_the_command_prints_the_counts_and_writes_its_files(tmp_path, capsys):
     df = pd.read_csv(out / "validity_map.csv")
     assert list(df.columns) == list(VALIDITY_COLUMNS) and len(df) == 4
     assert (out / "validity_map.png").stat().st_size > 0
+
+
+# ------------------------------------------------------------------------------------------
+# The report of a user's scene
+# ------------------------------------------------------------------------------------------
+SCENE_WITH_FRICTION = """name = "friction-block"
+version = 1
+description = "a block on a floor of friction 0.3"
+
+[structure]
+type = "block"
+width = 1.0
+height = 5.0
+depth = 1.0
+density = 2500.0
+
+[contact]
+friction = 0.3
+"""
+
+
+def test_a_users_plan_asks_for_the_map_only_when_its_scene_gives_a_friction(tmp_path):
+    from rockbench.campaign.plan import plan_for_scenes
+
+    f = tmp_path / "friction-block.toml"
+    f.write_text(SCENE_WITH_FRICTION, encoding="utf-8")
+    spec = plan_for_scenes([str(f)], quick=True, folder=tmp_path)["validity_map"]
+    assert spec["grid"] == 5 and spec["scene"] == str(f)
+    assert plan_for_scenes(["housner-block"], quick=True, folder=tmp_path)["validity_map"] is None
+
+
+@needs_engine
+def test_the_report_section_counts_the_cells_with_the_scenes_friction(tmp_path):
+    from rockbench.campaign.run import _validity_section
+    from rockbench.report.validity_figures import validity_html
+
+    assert _validity_section(None, ["analytic", *ENGINES], tmp_path, 1, False) == {}
+    f = tmp_path / "friction-block.toml"
+    f.write_text(SCENE_WITH_FRICTION, encoding="utf-8")
+    spec = {"scene": str(f), "grid": 2, "tail": 0.5}
+    assert "error" in _validity_section(spec, ["analytic"], tmp_path, 1, False)
+    sec = _validity_section(spec, ["analytic", ENGINES[0]], tmp_path, 1, False)
+    assert sec["friction"] == 0.3 and sec["engines"] == [ENGINES[0]]
+    df = sec["frame"]
+    assert len(df) == 4 and list(df.columns) == list(VALIDITY_COLUMNS)
+    html = validity_html(sec, tmp_path / "figures")
+    n = int((df["region"] == "model").sum())
+    assert f"In {n} of 4 cells the analytic model holds" in html and "mu = 0.3" in html
+    assert 'id="fig-validity_map"' in html and (tmp_path / "figures" / "validity_map.png").exists()
+    assert "failed" in validity_html({"error": "boom"})

@@ -268,6 +268,8 @@ class CampaignTables:
                "tradeoff.csv": self.choice["tradeoff"], "advice.csv": self.choice["advice"]}
         if len(self.records):
             out["record_peaks.csv"] = self.records
+        if self.validity.get("frame") is not None:
+            out["validity_map.csv"] = self.validity["frame"]
         if self.fragility.get("frames"):
             from .fragility import section_table
             out["fragility.csv"] = section_table(self.fragility)
@@ -329,12 +331,13 @@ def write_tables(t: CampaignTables, out: Path) -> list[Path]:
     not depend on the store's history."""
     from ..comparison import ETA_COLUMNS, METRIC_COLUMNS
     from ..studies.tradeoff_tables import TABLE_COLUMNS
+    from ..studies.validity_map import VALIDITY_COLUMNS
 
     paths = []
     for name, df in t.files().items():
         doc = CAMPAIGN_COLUMNS.get(name)
         if doc is not None:
-            kept = {*doc, *METRIC_COLUMNS, *ETA_COLUMNS, *TABLE_COLUMNS}
+            kept = {*doc, *METRIC_COLUMNS, *ETA_COLUMNS, *TABLE_COLUMNS, *VALIDITY_COLUMNS}
             df = df.drop(columns=[c for c in df.columns if c not in kept and df[c].isna().all()])
         df.to_csv(out / name, index=False)
         paths.append(out / name)
