@@ -22,7 +22,8 @@ Columns of the frame (:data:`VALIDITY_COLUMNS`; ``docs/maps.md``):
   ``"diverged"`` outside, and at least one engine's run diverged, was invalid or failed (or
   no engine could run);
 * ``reason``: the analytic run's validity sentence (``inside``, or "outside the model from
-  t = ... s: why");
+  t = ... s: why"; a run that does not assess it, e.g. a hybrid frame rocking with its devices
+  intact: the a-priori test from the motion, :func:`rockbench.validity.motion_validity`);
 * ``sliding_onset_s`` [s]: first time a contact of the analytic model needs more friction
   than it has (NaN: never); ``lift_off_s`` [s]: first time g + a_v <= 0 (NaN: never);
 * ``spread_phi`` [-]: (max - min) / max(median, :data:`PHI_FLOOR`) of the engines' peak
@@ -151,6 +152,7 @@ def _run_cell(item: Mapping[str, Any]) -> dict[str, Any]:
     from ..runner import run
     from ..scene.motion import RickerPulse
     from ..scene.scene import Scene
+    from ..validity import motion_validity
     from .maps import cell_duration
 
     scene = Scene.from_dict(item["scene"], source=f"scene {item['scene'].get('name', '')!r}")
@@ -165,7 +167,8 @@ def _run_cell(item: Mapping[str, Any]) -> dict[str, Any]:
         return dict(row, reason=f"not assessed: the analytic run failed ({type(e).__name__}: "
                                 f"{e})", sliding_onset_s=math.nan, lift_off_s=math.nan,
                     runs=json.dumps([{"engine": "analytic", "status": "error"}]))
-    reason = s.validity or "inside"
+    # the run's own check; a run that did not assess it: the a-priori one, from the motion
+    reason = s.validity or motion_validity(scene, motion).reason
     row.update(reason=reason, sliding_onset_s=_nan(s.sliding_onset),
                lift_off_s=_nan(s.t_lift_off))
     runs = []
