@@ -192,6 +192,10 @@ def test_the_figure_has_the_maps_axes_and_a_legend_below():
     ax = fig.axes[0]
     assert "a_g / (g tan α)" in ax.get_ylabel() and "ω_g / p" in ax.get_xlabel()
     assert len(fig.legends) == 1 and len(fig.legends[0].get_texts()) == 4
+    fig = plot_validity_map(pd.DataFrame({"A": [1.0, 2.0], "W": [1.0, 1.0],
+                                          "region": ["model", "agree"]}), a_mu=1.5)
+    texts = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert texts[0] == "PGA = mu g (structure at rest)" and len(texts) == 3
 
 
 @pytest.mark.parametrize("argv, option", [

@@ -513,6 +513,7 @@ def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], stor
     scene = load_scene(spec["scene"])
     engines = [e for e in names if e != REFERENCE]
     out = {"scene": scene.name, "friction": friction_of(scene), "tolerance": 0.10,
+           "a_mu": friction_of(scene) / math.tan(scene.alpha),
            "engines": engines, "shape": "symmetric", "sign": 1, "tail": spec["tail"]}
     if not engines:
         return dict(out, error="no engine ran in this campaign")

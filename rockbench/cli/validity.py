@@ -104,7 +104,8 @@ def cmd_validity_map(args: argparse.Namespace) -> int:
                          workers=args.workers, progress=enabled() and not args.json)
     if out is not None:
         write_atomic({out / "validity_map.csv": frame}, "--out")
-        _figure(plot_validity_map(frame, title=f"{scene.name}: validity map"),
+        _figure(plot_validity_map(frame, title=f"{scene.name}: validity map",
+                                  a_mu=friction_of(scene) / math.tan(scene.alpha)),
                 out / "validity_map.png")
     if args.json:
         print_json(frame.to_dict("records"))

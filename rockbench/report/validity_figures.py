@@ -36,9 +36,12 @@ def _edges(x: np.ndarray) -> np.ndarray:
     return np.concatenate(([x[0] - (mid[0] - x[0])], mid, [x[-1] + (x[-1] - mid[-1])]))
 
 
-def plot_validity_map(frame: pd.DataFrame, *, title: str | None = None) -> Figure:
+def plot_validity_map(frame: pd.DataFrame, *, title: str | None = None,
+                      a_mu: float | None = None) -> Figure:
     """The regions of a validity map over (W, A): one colour per region
-    (:data:`REGION_COLORS`), the legend below the panel."""
+    (:data:`REGION_COLORS`), the legend below the panel; with ``a_mu`` [-] (A at which the
+    PGA reaches mu g, mu / tan alpha, for a pulse whose peak is a_g) a dashed line there, the
+    a-priori limit without rocking."""
     from .figures import legend_below
 
     codes = {r: i for i, r in enumerate(REGION_COLORS)}
@@ -56,6 +59,9 @@ def plot_validity_map(frame: pd.DataFrame, *, title: str | None = None) -> Figur
     ax.set_ylabel("A = a_g / (g tan α) [-]")
     if title:
         ax.set_title(title)
+    if a_mu is not None and A.min() <= a_mu <= A.max():
+        ax.axhline(a_mu, color="black", linestyle="--", linewidth=1.2,
+                   label="PGA = mu g (structure at rest)")
     present = set(frame["region"])
     legend_below(fig, extra=[(Patch(color=REGION_COLORS[r]), REGION_LABELS[r])
                              for r in REGION_COLORS if r in present], max_cols=2)
@@ -112,6 +118,7 @@ def validity_html(section: Mapping[str, Any], figdir: Any = None) -> str:
                f"verdict and their peak |phi| and sliding spread by at most "
                f"{100 * section['tolerance']:.0f} % of the median (docs/maps.md).")
     parts = ["<ul>" + "".join(f"<li>{H.fmt(s)}</li>" for s in words) + "</ul>",
-             H.figure_html(plot_validity_map(df, title=f"{section['scene']}: validity map"),
+             H.figure_html(plot_validity_map(df, title=f"{section['scene']}: validity map",
+                                             a_mu=section.get("a_mu")),
                            caption, name="validity_map", png_dir=figdir)]
     return "\n".join(parts)
