@@ -150,11 +150,22 @@ def test_the_store_resumes_and_a_second_call_runs_nothing(tmp_path, monkeypatch)
     (dict(shape="square"), "shape"),
     (dict(sign=0), "sign"),
     (dict(tolerance=0.0), "tolerance"),
+    (dict(engines=ENGINES or ["pymunk"], settings={"drake": {"dt": 1e-3}}), "settings"),
 ])
 def test_bad_inputs_name_the_parameter(kw, name):
+    if "settings" in kw and not ENGINES:
+        pytest.skip("no engine installed to take settings")
     with pytest.raises(ParameterError) as e:
         validity_map(_slender(), **dict(dict(A=[0.5], W=[2.0], workers=1), **kw))
     assert e.value.name == name
+
+
+@needs_engine
+def test_a_setting_the_engine_does_not_have_is_refused_before_any_run():
+    with pytest.raises(ParameterError) as e:
+        validity_map(_slender(), A=[8.0], W=[2.0], engines=ENGINES[:1], workers=1,
+                     settings={ENGINES[0]: {"no_such_field": 1}})
+    assert e.value.name == "settings" and "no_such_field" in str(e.value)
 
 
 # ------------------------------------------------------------------------------------------

@@ -239,6 +239,23 @@ def engines_to_run(engines: Any) -> list[str]:
     return [e for e in names if e in have]
 
 
+def _check_settings(settings: Mapping[str, Mapping[str, Any]], names: Sequence[str]) -> None:
+    """ParameterError naming ``settings`` for an engine not run or a field its Settings
+    dataclass does not have (the values are checked by the engine when it runs)."""
+    import dataclasses
+
+    from ..engines import get_backend
+
+    for e, fields in settings.items():
+        if e not in names:
+            raise ParameterError("settings", e, f"settings of the engines run: {names}")
+        known = {f.name for f in dataclasses.fields(get_backend(e).Settings)}
+        bad = sorted(set(fields) - known)
+        if bad:
+            raise ParameterError("settings", f"{e}.{bad[0]}", f"a field of {e}'s settings: "
+                                                             f"{', '.join(sorted(known))}")
+
+
 def validity_map(scene: Any, *, shape: str = "symmetric", sign: int = 1, A: Any = None,
                  W: Any = None, vertical_ratio: float = 0.0, engines: Any = None,
                  settings: Mapping[str, Mapping[str, Any]] | None = None,
@@ -278,9 +295,7 @@ def validity_map(scene: Any, *, shape: str = "symmetric", sign: int = 1, A: Any 
     Ws = _axis(dw if W is None else W, "W")
     names = engines_to_run(engines)
     settings = {k: dict(v or {}) for k, v in (settings or {}).items()}
-    bad = [k for k in settings if k not in names]
-    if bad:
-        raise ParameterError("settings", bad[0], f"settings of the engines run: {names}")
+    _check_settings(settings, names)
 
     sd = scene.to_dict()
     base = {"scene": sd, "shape": shape, "sign": int(sign), "vertical_ratio": vr,
