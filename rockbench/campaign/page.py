@@ -110,6 +110,10 @@ def write_page(t: Any, out: Path) -> Path:
                           f"W in {mp['analytic_frequency']}, pulse window + 10 s",
             axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
                  f"+ {mp['engine_tail']:g} s", paper=t.paper))
+    if t.validity:
+        from ..report.validity_figures import validity_html
+        sections["validity-section"] = ("Where the analytic model holds",
+                                        validity_html(t.validity, out / "figures"))
     if t.fragility:
         from ..report.fragility_figures import fragility_html
         sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)"

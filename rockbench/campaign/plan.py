@@ -160,6 +160,12 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
                  "engine_amplitude": f"1:{hi:g}", "engine_frequency": "1:10",
                  "engine_tail": 3.0, "measured_grid": (12, 12), "full_grid": (100, 100),
                  "fast_grids": {_label(first): (6, 6)}},
+        # where the analytic model holds (rockbench.studies.validity_map): only when the
+        # first scene gives its own [contact] friction (without one, the engines' default
+        # friction 1.0 keeps most pulses inside the model, and the map would cost ~1-2 CPU
+        # minutes to say so)
+        "validity_map": ({"scene": first, "grid": 5 if quick else 8, "tail": 3.0}
+                         if sc0.friction is not None else None),
     })
     return plan
 

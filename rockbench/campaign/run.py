@@ -244,6 +244,7 @@ class CampaignTables:
     maps: dict[str, Any]
     choice: dict[str, Any]
     fragility: dict[str, Any]
+    validity: dict[str, Any]
     notes: list[str]
     labels: dict[str, str]
     timings: dict[str, float]
@@ -267,6 +268,8 @@ class CampaignTables:
                "tradeoff.csv": self.choice["tradeoff"], "advice.csv": self.choice["advice"]}
         if len(self.records):
             out["record_peaks.csv"] = self.records
+        if self.validity.get("frame") is not None:
+            out["validity_map.csv"] = self.validity["frame"]
         if self.fragility.get("frames"):
             from .fragility import section_table
             out["fragility.csv"] = section_table(self.fragility)
@@ -328,12 +331,13 @@ def write_tables(t: CampaignTables, out: Path) -> list[Path]:
     not depend on the store's history."""
     from ..comparison import ETA_COLUMNS, METRIC_COLUMNS
     from ..studies.tradeoff_tables import TABLE_COLUMNS
+    from ..studies.validity_map import VALIDITY_COLUMNS
 
     paths = []
     for name, df in t.files().items():
         doc = CAMPAIGN_COLUMNS.get(name)
         if doc is not None:
-            kept = {*doc, *METRIC_COLUMNS, *ETA_COLUMNS, *TABLE_COLUMNS}
+            kept = {*doc, *METRIC_COLUMNS, *ETA_COLUMNS, *TABLE_COLUMNS, *VALIDITY_COLUMNS}
             df = df.drop(columns=[c for c in df.columns if c not in kept and df[c].isna().all()])
         df.to_csv(out / name, index=False)
         paths.append(out / name)
@@ -472,6 +476,11 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
                                  progress=progress)
     timings["fragility"] = time.perf_counter() - t
 
+    # 8: where the analytic model holds (a user's scene with its own friction) -------------
+    t = time.perf_counter()
+    validity = _validity_section(plan.get("validity_map"), names, store_dir, workers, progress)
+    timings["validity map"] = time.perf_counter() - t
+
     # tables -----------------------------------------------------------------------------
     metrics = T.metrics_table(payloads)
     eta, eta_summary = T.eta_tables(payloads)
@@ -484,9 +493,38 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
                           payloads=payloads, dt_payloads=dt_payloads, metrics=metrics, eta=eta,
                           eta_summary=eta_summary, engines=engines_tab, speed=speed,
                           records=records, maps=maps, choice=choice, fragility=frag,
-                          notes=notes, labels=labels, timings=timings, quick=quick,
+                          validity=validity, notes=notes, labels=labels, timings=timings,
+                          quick=quick,
                           records_dir=records_dir, store_dir=store_dir,
                           fingerprint=fingerprint, paper=paper, t_start=t_start)
+
+
+def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], store_dir: Path,
+                      workers: int | None, progress: bool) -> dict[str, Any]:
+    """The validity map of the plan's ``validity_map`` (``scene``, ``grid`` n, ``tail`` [s];
+    None: none) with the campaign's engines, as the page's section wants it
+    (:func:`rockbench.report.validity_figures.validity_html`); {} without one."""
+    if not spec:
+        return {}
+    from ..scene import load_scene
+    from ..studies.validity_map import default_axes, validity_map
+    from ..validity import friction_of
+
+    scene = load_scene(spec["scene"])
+    engines = [e for e in names if e != REFERENCE]
+    out = {"scene": scene.name, "friction": friction_of(scene), "tolerance": 0.10,
+           "a_mu": friction_of(scene) / math.tan(scene.alpha),
+           "engines": engines, "shape": "symmetric", "sign": 1, "tail": spec["tail"]}
+    if not engines:
+        return dict(out, error="no engine ran in this campaign")
+    A, W = default_axes(scene, int(spec["grid"]))
+    try:
+        frame = validity_map(scene, A=A, W=W, engines=engines, tolerance=out["tolerance"],
+                             tail=spec["tail"], workers=workers, progress=progress,
+                             store=store_dir if S.have_pyarrow() else None)
+    except Exception as e:  # noqa: BLE001 - the page says it, the rest of the report stands
+        return dict(out, error=f"{type(e).__name__}: {e}")
+    return dict(out, frame=frame)
 
 
 def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],

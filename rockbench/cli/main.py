@@ -20,6 +20,8 @@ Commands (``docs/cli.md`` shows each with real output)::
                         [--json]
     rockbench map       SCENE [--engine NAME] [--grid NAxNW] ... | --compare A B
     rockbench fragility SCENE --records ... [--engine NAME ...] ...
+    rockbench validity-map SCENE [--shape S] [--sign 1|-1] [--vertical RATIO] [--engine NAME ...]
+                        [--grid N] [--out DIR] [--json]
 
 One grammar everywhere: ``--engine NAME`` (repeatable where a command runs several;
 ``--engines`` is the same option), ``--setting ENGINE.KEY=VALUE`` (bare ``KEY=VALUE`` only when
@@ -64,7 +66,8 @@ PROG = "rockbench"
 
 #: Commands that run several engines (by default every registered one): each ends by naming
 #: the engines of its selection that could not run here, why, and the remedy.
-ENGINE_COMMANDS = ("report", "compare", "tradeoff", "advise", "stress", "fragility")
+ENGINE_COMMANDS = ("report", "compare", "tradeoff", "advise", "stress", "fragility",
+                   "validity-map")
 
 #: Summary rows of ``rockbench compare`` (the full table goes to --csv / --json).
 COMPARE_COLUMNS = ("backend", "status", "max_abs_phi_over_alpha", "peak_rel_error", "nrmse",
@@ -149,6 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_map_command(sub)
     from .fragility import register as add_fragility  # rockbench fragility
     add_fragility(sub, COMMANDS)
+    from .validity import register as add_validity  # rockbench validity-map
+    add_validity(sub, COMMANDS)
     return parser
 
 

@@ -29,7 +29,7 @@ __all__ = ["page_sections", "runtime_html", "render", "fracture_html", "band_sum
 SECTION_ORDER = ("decision-section", "conclusion-section", "summary-section",
                  "histories-section", "cases-section", "fracture-section", "eta-section",
                  "speed-section", "records-section", "choice-section",
-                 "maps-section", "fragility-section", "settings-section", "files-section",
+                 "maps-section", "validity-section", "fragility-section", "settings-section", "files-section",
                  "runtime-section")
 
 
