@@ -43,7 +43,7 @@ from rockbench.analytic import rules  # noqa: E402
 from rockbench.analytic.compiled import run_pulse_grid  # noqa: E402
 from rockbench.analytic.kernels import _ANTI_EXT, _BETA, _SYM_EXT, _XFAC  # noqa: E402
 from rockbench.analytic.kernels import _brent_core, _dense_eval, _next_uplift  # noqa: E402
-from rockbench.analytic.kernel_run import _pulse_setup  # noqa: E402
+from rockbench.analytic.kernel_grid import _pulse_setup  # noqa: E402
 from rockbench.analytic.kernels import _max_abs_after  # noqa: E402
 from rockbench.analytic.reference import reference_of  # noqa: E402
 from rockbench.constants import G  # noqa: E402

@@ -3,7 +3,8 @@
 store, in process CPU time (user + system, children included), on structures written from
 docs/scenes.md (``benchmarks/scenes/``), and what each decided.
 
-    python benchmarks/decision.py [--repeat R] [--scene FILE ...] [--out DIR]
+    python benchmarks/decision.py [--repeat R] [--scene FILE ...] [--commands both|quick|advise]
+                                  [--out DIR]
 
 Writes ``decision.md``: per structure and command, the CPU time (median and range over the
 repeats), the wall time, and the decision (per tolerance: the recommended engine and setting, or
@@ -86,6 +87,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--scene", action="append", default=None)
     ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--commands", choices=("both", "quick", "advise"), default="both",
+                    help="which commands to time (default both)")
     args = ap.parse_args(argv)
     from compiled_analytic import machine
 
@@ -106,6 +109,9 @@ def main(argv=None) -> int:
     for scene in scenes:
         for name, fn in (("report SCENE --quick", quick_report),
                          ("advise SCENE --tolerance 0.02", advise)):
+            if args.commands != "both" and not name.startswith(
+                    "report" if args.commands == "quick" else "advise"):
+                continue
             cpus, walls, said = [], [], []
             for _ in range(args.repeat):
                 c, w, said = fn(scene)

@@ -17,7 +17,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["Excursion", "excursions", "measure_impacts", "extrapolate_to_closure"]
+__all__ = ["Excursion", "excursions", "measure_impacts", "extrapolate_to_closure",
+           "slip_onset"]
 
 
 # =========================================================================================
@@ -290,3 +291,34 @@ def _root_near_zero(c, h: float) -> float:
     roots = np.roots([c2, c1, c0]) if c2 != 0.0 else (np.array([-c0 / c1]) if c1 else [])
     roots = [r.real for r in np.atleast_1d(roots) if abs(r.imag) < 1e-12 and abs(r.real) <= h]
     return min(roots, key=abs) if roots else 0.0
+
+
+def slip_onset(t: np.ndarray, slip: np.ndarray, *, lo: float = 1e-5, hi: float = 1e-3
+               ) -> float:
+    """The time [s] a contact starts to slide, from a sampled slip history ``slip`` [m] (e.g.
+    an engine's ``sliding`` column) at times ``t`` [s]; NaN if the slip never exceeds ``hi``.
+
+    At the onset of Coulomb sliding under a smooth ground motion the relative acceleration
+    grows linearly from zero (the ground's acceleration crosses mu (g + a_v) with a non-zero
+    slope), so the slip grows as c (t - t0)^3. The first excursion of the slip from ``lo`` to
+    ``hi`` [m] is fitted by a straight line of slip^(1/3) against t and t0 is its root: an
+    estimate that neither a threshold's lag (a cubic start) nor an engine's creep below
+    ``lo`` (regularized contacts) biases. ``0 < lo < hi``."""
+    from .errors import ParameterError
+
+    if not (0.0 < lo < hi):
+        raise ParameterError("lo", lo, f"0 < lo < hi = {hi!r}")
+    t = np.asarray(t, dtype=float)
+    s = np.abs(np.asarray(slip, dtype=float))
+    over = np.flatnonzero(s > hi)
+    if not over.size:
+        return math.nan
+    i1 = int(over[0])
+    i0 = i1
+    while i0 > 0 and s[i0 - 1] > lo:
+        i0 -= 1
+    if i1 - i0 < 2:                       # too few samples between lo and hi: the first above lo
+        return float(t[i0])
+    a, b = np.polyfit(t[i0:i1 + 1], np.cbrt(s[i0:i1 + 1]), 1)
+    return float(-b / a) if a > 0 else float(t[i0])
+

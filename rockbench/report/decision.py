@@ -66,8 +66,7 @@ def model_sentence(model: Mapping[str, Any], advice: pd.DataFrame | None) -> str
         c = pd.to_numeric(ok["cpu_per_sim_s"], errors="coerce").dropna()
         if len(c):
             r = float(c.min()) / cost
-            text += (f", {r:.3g} times less than the cheapest confirmed engine setting" if r >= 1
-                     else f", {1 / r:.3g} times more than the cheapest confirmed engine setting")
+            text += f" (the cheapest confirmed engine setting costs {r:.3g} times as much)"
     return text + ("; outside it (a base or beam that slides, a structure that leaves the "
                    "ground) only the engines answer, and no engine is checked against it there.")
 
@@ -158,9 +157,10 @@ def _where_it_breaks(breaks: pd.DataFrame | None, engine: str, *, first_only: bo
         name = str(r.get("axis"))
         unit = str(r.get("unit") or "") if pd.notna(r.get("unit")) else ""
         unit = "" if unit in ("-", "") else (" " + unit)
-        parts.append(f"{name} = {v}{unit}: {r.get('class')} ({_short_reason(r.get('reason'))})")
+        parts.append(f"{name} = {v}{unit}: {r.get('class')} "
+                     f"({_short_reason(r.get('reason'), 30 if first_only else 48)})")
     if first_only and len(parts) > 1:
-        return f"{parts[0]}; {len(parts) - 1} more axes in the stability section"
+        return f"{parts[0]} (+{len(parts) - 1} more axes)"
     return "; ".join(parts)
 
 
@@ -231,6 +231,9 @@ def decision_table(advice: pd.DataFrame, *, agreement: pd.DataFrame | None = Non
                                                 "exact · inside its validity")
         if model.get("breaks"):
             first["breaks first at"] = str(model["breaks"])
+        for col in ("map agreement", "free-rocking eta error (worst)"):
+            if any(col in r for r in rows):
+                first[col] = "the reference"
         rows.insert(0, first)
     return pd.DataFrame(rows)
 
@@ -248,18 +251,37 @@ def evidence_note(tradeoff: pd.DataFrame | None, *, size: str = "quick",
             f"held out to confirm (free rocking, pulses near and away from the boundary, "
             f"records)")
     if coverage:
+        nrec = int(coverage["records"])
         text += (f"; held out: {coverage['counted']} counted ({coverage['overturning']} "
-                 f"overturning, {coverage['records']} records), {coverage['near_boundary']} "
-                 f"near the boundary (reported, not counted)")
+                 f"overturning, {nrec} record{'' if nrec == 1 else 's'}), "
+                 f"{coverage['near_boundary']} near the boundary (reported, not counted)")
         if coverage.get("thin"):
             text += f". Note: {coverage['thin']}"
     if cpu_s is not None and math.isfinite(cpu_s):
-        text += f". The search spent {cpu_s:.0f} CPU s"
+        text += (f". The search spent {cpu_s:.0f} CPU s" if cpu_s > 0.5 else
+                 ". The search's runs were reused from the store (their cost: advice.csv)")
     more = {"quick": " `rockbench advise SCENE` decides on the default evidence and `--full` "
                      "on the full one (with a search of the contact settings).",
             "default": " `rockbench advise SCENE --full` decides on the full evidence and "
                        "adds a search of the contact settings."}.get(size, "")
     return text + "." + more
+
+
+def _row_cells(values: list[Any], columns: list[str]) -> str:
+    """A decision row's cells; equal neighbouring cells of the tolerance columns are one cell
+    spanning them (an engine whose setting holds at several tolerances says it once)."""
+    out, i = [], 0
+    while i < len(values):
+        v = "" if pd.isna(values[i]) else str(values[i])
+        n = 1
+        if columns[i].startswith("within "):
+            while (i + n < len(values) and columns[i + n].startswith("within ")
+                   and ("" if pd.isna(values[i + n]) else str(values[i + n])) == v):
+                n += 1
+        span = f' colspan="{n}"' if n > 1 else ""
+        out.append(f'<td class="txt"{span}>{escape(v)}</td>')
+        i += n
+    return "".join(out)
 
 
 def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
@@ -282,9 +304,8 @@ def decision_html(advice: pd.DataFrame, *, scene: str, structure: str = "",
                          scene=scene, model=model)
     if len(tab):
         head = "".join(f"<th class=\"txt\">{escape(c)}</th>" for c in tab.columns)
-        body = "".join("<tr>" + "".join(
-            f"<td class=\"txt\">{escape('' if pd.isna(v) else str(v))}</td>" for v in r)
-            + "</tr>" for r in tab.itertuples(index=False))
+        body = "".join("<tr>" + _row_cells(list(r), list(tab.columns)) + "</tr>"
+                       for r in tab.itertuples(index=False))
         parts.append(f'<table id="decision-table"><caption>Each engine on {escape(scene)}: '
                      "the setting to use within each tolerance, its cost in CPU s per "
                      "simulated s, and its worst error on the chosen / the held-out cases"
