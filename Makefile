@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: report test install clean bench docs
+.PHONY: report test test-slow install clean bench docs
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,10 @@ report: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2
+
+# the slow tests (exhaustive maps, committed maps re-run, full reports): about an hour on 2 cores
+test-slow: $(STAMP)
+	$(PY) -m pytest -q -n 2 -m slow --run-slow
 
 docs: $(STAMP)
 	$(PY) tools/render_docs.py

@@ -734,6 +734,9 @@ SETTING_RANGES = [
     ("opensees", "tolerance", 1e-12, 1e-4, False),
     ("opensees", "springs", 2, 101, True),
 ]
+#: Settings whose None is a documented value (OpenSees' tolerance: its default, which depends
+#: on whether the scene gives a friction).
+NONE_IS_DEFAULT = {("opensees", "tolerance")}
 #: A run that returns must not have "diverged" because the engine refused a value.
 ENGINE_REFUSAL = re.compile(r"^(\w*Error|\w*Exception|XML)|too large|does not fit|"
                             r"greater than maximum")
@@ -744,6 +747,8 @@ def setting_values(draw):
     engine, key, lo, hi, integer = draw(st.sampled_from(SETTING_RANGES))
     value = draw(st.sampled_from([lo, hi, 2 ** 31 - 1, 2 ** 31, 10 ** 12, -1, 0, 1e300, 1e-300,
                                   NAN, INF, "abc", None, True, 2.5, hi * 1.5 + 1]))
+    if value is None and (engine, key) in NONE_IS_DEFAULT:
+        return engine, key, value, True          # None: the documented default
     if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
         return engine, key, value, False
     inside = lo <= value <= hi and (not integer or float(value).is_integer())
