@@ -245,13 +245,14 @@ class FrameMechanism:
         """Largest |phi| [rad] up to which the linkage can be assembled (its toggle), or pi."""
         return geometric_limit(self)
 
-    def configuration_many(self, phi) -> list[dict]:
-        """:meth:`configuration` over an array ``phi`` [rad]: one dict per body (left, beam,
-        right) of arrays keyed by the fields of :class:`BodyKinematics` (same closed forms,
-        tested against it). ValueError beyond the linkage's reach."""
+    def _closure_many(self, phi):
+        """The loop closure over an array ``phi`` [rad], the one vectorized form that
+        :meth:`configuration_many` and :meth:`angles_many` share: sin and cos of AB's angle, B,
+        the angles of BC and CD [rad], the closure's Jacobian (m11, m12, m21, m22, det) and the
+        derivatives of BC's and CD's angles with respect to phi [-]. ValueError beyond the
+        linkage's reach."""
         import numpy as np
 
-        phi = np.asarray(phi, dtype=float)
         Ax, Ay = self._A
         Dx, Dy = self._D
         L, r0, r1 = self._L, self._rho0, self._rho1
@@ -271,13 +272,27 @@ class FrameMechanism:
         Cy = Dy + (ap * uy + hh * ux) / d
         pbc = np.arctan2(Cy - By, Cx - Bx)
         pcd = np.arctan2(Cy - Dy, Cx - Dx)
-        sbc, cbc = np.sin(pbc), np.cos(pbc)
-        scd, ccd = np.sin(pcd), np.cos(pcd)
-        m11, m12, m21, m22 = -L * sbc, r1 * scd, L * cbc, -r1 * ccd
+        m11, m12 = -L * np.sin(pbc), r1 * np.sin(pcd)
+        m21, m22 = L * np.cos(pbc), -r1 * np.cos(pcd)
         det = m11 * m22 - m12 * m21
         f1, f2 = r0 * sab, -r0 * cab
         dbc = (f1 * m22 - m12 * f2) / det
         dcd = (m11 * f2 - f1 * m21) / det
+        return sab, cab, Bx, By, pbc, pcd, m11, m12, m21, m22, det, dbc, dcd
+
+    def configuration_many(self, phi) -> list[dict]:
+        """:meth:`configuration` over an array ``phi`` [rad]: one dict per body (left, beam,
+        right) of arrays keyed by the fields of :class:`BodyKinematics` (same closed forms,
+        tested against it). ValueError beyond the linkage's reach."""
+        import numpy as np
+
+        phi = np.asarray(phi, dtype=float)
+        Ax, Ay = self._A
+        Dx, Dy = self._D
+        L, r0, r1 = self._L, self._rho0, self._rho1
+        sab, cab, Bx, By, pbc, pcd, m11, m12, m21, m22, det, dbc, dcd = self._closure_many(phi)
+        sbc, cbc = np.sin(pbc), np.cos(pbc)
+        scd, ccd = np.sin(pcd), np.cos(pcd)
         g1 = r0 * cab + L * cbc * dbc * dbc - r1 * ccd * dcd * dcd
         g2 = r0 * sab + L * sbc * dbc * dbc - r1 * scd * dcd * dcd
         ddbc = (g1 * m22 - m12 * g2) / det
@@ -297,32 +312,8 @@ class FrameMechanism:
         :meth:`configuration` (tested against it)."""
         import numpy as np
 
-        phi = np.asarray(phi, dtype=float)
-        Ax, Ay = self._A
-        Dx, Dy = self._D
-        L, r0, r1 = self._L, self._rho0, self._rho1
-        a = self._phiAB0 + phi
-        Bx, By = Ax + r0 * np.cos(a), Ay + r0 * np.sin(a)
-        ux, uy = Bx - Dx, By - Dy
-        d2 = ux * ux + uy * uy
-        d = np.sqrt(d2)
-        ap = (d2 + r1 * r1 - L * L) / (2.0 * d)
-        h2 = r1 * r1 - ap * ap
-        if np.any(h2 < 0.0):
-            raise ValueError("phi beyond the reach of the frame mechanism; see "
-                             "geometric_limit()")
-        hh = self._branch * np.sqrt(h2)
-        Cx = Dx + (ap * ux - hh * uy) / d
-        Cy = Dy + (ap * uy + hh * ux) / d
-        pbc = np.arctan2(Cy - By, Cx - Bx)
-        pcd = np.arctan2(Cy - Dy, Cx - Dx)
-        sab, cab = np.sin(a), np.cos(a)
-        m11, m12 = -L * np.sin(pbc), r1 * np.sin(pcd)
-        m21, m22 = L * np.cos(pbc), -r1 * np.cos(pcd)
-        det = m11 * m22 - m12 * m21
-        f1, f2 = r0 * sab, -r0 * cab
-        dbc = (f1 * m22 - m12 * f2) / det
-        dcd = (m11 * f2 - f1 * m21) / det
+        _, _, _, _, pbc, pcd, _, _, _, _, _, dbc, dcd = self._closure_many(
+            np.asarray(phi, dtype=float))
         return pbc - self._phiBC0, pcd - self._phiCD0, dbc, dcd
 
 
