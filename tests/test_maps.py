@@ -403,3 +403,32 @@ def test_compare_refuses_maps_of_different_structures(tmp_path):
                        text=True, timeout=600)
     assert r.returncode == 2 and "different structures" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("scene, mirrored, a_max", [("paper-symmetric", True, 8.0),
+                                                    ("paper-symmetric-hybrid", True, 40.0),
+                                                    ("paper-asymmetric", False, 8.0)])
+def test_a_mirror_symmetric_structure_runs_one_sign_and_mirrors_the_other(
+        scene, mirrored, a_max, monkeypatch):
+    """The reversed pulse's cells of a mirror-symmetric structure are its +1 cells mirrored:
+    verdicts, impacts and fractures equal to running them (peaks to round-off); an
+    asymmetric frame runs both."""
+    import rockbench.studies.maps as M
+
+    kw = dict(grid=(9, 7), amplitude=(1.0, a_max), frequency=(1.0, 10.0), progress=False)
+    fast = run_map(scene, **kw)
+    assert rb.load_scene(scene).mirror_symmetric is mirrored
+    monkeypatch.setattr(M, "mirror_twins", lambda cells: (list(cells), {}))
+    full = run_map(scene, **kw)
+    key = ["pulse", "sign", "amplitude", "frequency"]
+    a = fast.sort_values(key).reset_index(drop=True)
+    b = full.sort_values(key).reset_index(drop=True)
+    assert len(a) == len(b) == 9 * 7 * 4
+    for col in ("overturned", "exceeded_critical", "n_impacts", "fractured", "status"):
+        assert (a[col].astype(str) == b[col].astype(str)).all(), col
+    np.testing.assert_allclose(a["max_abs_phi_over_alpha"].astype(float),
+                               b["max_abs_phi_over_alpha"].astype(float), rtol=1e-9)
+    assert not a["overturned"].astype(bool).all()
+    assert a["overturned"].astype(bool).any() or a["max_abs_phi_over_alpha"].max() > 0.5
+    n_free = int((a.loc[a["sign"] == -1, "cpu_s"] == 0.0).sum())   # mirrored: no CPU
+    assert n_free == (9 * 7 * 2 if mirrored else 0)

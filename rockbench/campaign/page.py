@@ -9,6 +9,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+
 from ..report import campaign_page as P
 from ..report.conclusions import campaign_conclusion
 from ..sweep.executors import cpu_count
@@ -77,15 +79,26 @@ def model_row(t: Any, scene_word: str) -> dict[str, Any] | None:
             "breaks": f"PGA > {lim:.3g} g: the base slides (outside the model)"}
 
 
+def _write_runtime(timings: dict[str, tuple[float, float]], path: Path) -> None:
+    """``runtime.csv``: wall and CPU seconds of each part of the run (columns in
+    :data:`rockbench.report.tables.CAMPAIGN_COLUMNS`)."""
+    from ..machine import cpu_name
+
+    pd.DataFrame([{"part": k, "wall_s": round(w, 2), "cpu_s": round(c, 2),
+                   "workers": cpu_count(), "processor": cpu_name()}
+                  for k, (w, c) in timings.items()]).to_csv(path, index=False)
+
+
 def write_page(t: Any, out: Path) -> Path:
     """Write ``out/index.html`` (and its figures under ``out/figures``) from a campaign's
     tables ``t``; return the page's path."""
     from ..report.choice_page import choice_html, work_precision_html
     from ..report.decision import decision_html, decision_sentences, evidence_note
     from ..report.maps_page import maps_html
+    from ..machine import tree_cpu_s
     from .plan import structure_table
 
-    w0 = time.perf_counter()
+    w0, c0 = time.perf_counter(), tree_cpu_s()
     plan, choice, maps = t.plan, t.choice, t.maps
     decision = choice.get("decision")
     scene_word = choice.get("scene", "the structure")
@@ -129,11 +142,10 @@ def write_page(t: Any, out: Path) -> Path:
                                          coverage=decision.coverage if decision else None,
                                          cpu_s=decision.cpu_s if decision else None)] if n],
         work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
-    timings = dict(t.timings, report=time.perf_counter() - w0)
-    total = time.perf_counter() - t.t_start
-    cpu = sum(float(p.get("cpu_s", 0.0)) for p in t.payloads + t.dt_payloads)
-    sections["runtime-section"] = ("Run time", P.runtime_html(timings, total,
-                                                              cpu_count(), cpu))
+    timings = dict(t.timings, report=(time.perf_counter() - w0, tree_cpu_s() - c0))
+    total = (time.perf_counter() - t.t_start, tree_cpu_s() - t.cpu_start)
+    sections["runtime-section"] = ("Run time", P.runtime_html(timings, total, cpu_count()))
+    _write_runtime(dict(timings, total=total), out / "runtime.csv")
     path = out / "index.html"
     path.write_text(P.render(P.ordered(sections), quick=t.quick,
                              with_records=bool(len(t.records)),

@@ -51,7 +51,7 @@ from ..runner import REFERENCE, resolve_engines
 from ..scene.records import bundled_dir, find_records
 from ..sweep import store as S
 from .plan import campaign_plan
-from ..sweep.executors import check_options, execute
+from ..sweep.executors import check_options, execute, run_parts
 
 __all__ = ["CAMPAIGN_COLUMNS", "CampaignTables", "campaign_plan", "code_fingerprint",
            "find_records", "measure_campaign", "run_campaign", "write_tables"]
@@ -247,13 +247,14 @@ class CampaignTables:
     validity: dict[str, Any]
     notes: list[str]
     labels: dict[str, str]
-    timings: dict[str, float]
+    timings: dict[str, tuple[float, float]]
     quick: bool
     records_dir: Any
     store_dir: Path
     fingerprint: str
     paper: bool
     t_start: float = field(default_factory=time.perf_counter)
+    cpu_start: float = 0.0
 
     @property
     def missing(self) -> list[str]:
@@ -358,6 +359,9 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
     from ..engines import check_required, engine_states
 
     t_start = time.perf_counter()
+    from ..machine import tree_cpu_s
+
+    cpu_start = tree_cpu_s()
     check_options(executor, workers, dask_address)
     check_required()              # ROCKBENCH_REQUIRE_ENGINES: a missing engine is an error
     # every registered engine has a state, decided once: ran, not installed (why, remedy),
@@ -393,93 +397,30 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
                      "between runs (pip install 'rockbench[parquet]').")
     run = dict(executor=executor, dask_address=dask_address, progress=progress,
                workers=workers)
-    timings: dict[str, float] = {}
+    timings: dict[str, tuple[float, float]] = {}
 
-    # 1 + 2: comparisons (pulse cases, free rocking) ------------------------------------
-    t = time.perf_counter()
-    jobs = []
-    for scene in plan["scenes"]:
-        for (A, W) in plan["pulse_points"]:
-            for shape, sign in plan["pulse_shapes"]:
-                jobs.append({"kind": "pulse", "scene": scene, "engines": names,
-                             "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
-                                        "A": float(A), "W": float(W)},
-                             "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
-    for scene, shape, sign, A, W in plan["fracture_cases"]:
-        jobs.append({"kind": "fracture", "scene": scene, "engines": names,
-                     "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
-                                "A": float(A), "W": float(W)},
-                     "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
-    for scene in plan["scenes"]:
-        jobs.append({"kind": "free", "scene": scene, "engines": names, "motion": None,
-                     "phi0_over_alpha": plan["free_phi0"], "duration": plan["free_duration"]})
-    payloads = _comparisons(jobs, cache=cache, desc="comparisons", **run)
-    timings["comparisons"] = time.perf_counter() - t
+    # the parts are independent of each other: each one runs its cases on its own worker
+    # pools. With the local process executor they run in two lanes at once (the second lane
+    # in a process of its own), so that one part's last cases, or its work in this process,
+    # do not leave a core idle; lanes balanced by the parts' CPU on the paper's plan
+    ctx = dict(plan=plan, names=names, store_dir=store_dir, out=out, quick=quick, full=full,
+               records_dir=records_dir, fragility_records=fragility_records,
+               sweep_store=sweep_store, cache=cache, run=run)
+    parts = {name: (fn, (ctx,)) for name, fn in _PARTS.items()}
+    lanes = _LANES if executor == "process" and (workers or 2) > 1 else [list(_PARTS)]
+    got = run_parts(parts, timings, lanes=lanes)
+    timings = {k: timings[k] for k in _PARTS}
+    payloads, dt_payloads = got["comparisons"], got["speed"]
+    maps, choice, frag, validity = got["maps"], got["choice"], got["fragility"], got["validity map"]
+    records, record_notes = got["records"]
+    notes.extend(record_notes)
     for p in payloads:
         if "error" in p:
             notes.append(f"{p['label']} failed: {p['error']}")
     payloads = [p for p in payloads if "error" not in p]
-
-    # 3: speed against accuracy ------------------------------------------------------------
-    t = time.perf_counter()
-    dc = plan["dt_case"]
-    dur = _pulse_duration(dc["scene"], dc["A"], dc["W"], dc["shape"], plan["dt_tail"])
-    dt_jobs = [{"kind": "dt", "scene": dc["scene"], "engine": e, "dt": float(dt),
-                "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")}},
-                "duration": dur}
-               for e in names if e != REFERENCE for dt in plan["dt_sweep"]]
-    dt_payloads = _comparisons(dt_jobs, cache=cache, desc="time steps", **run)
-    speed = T.speed_table(
+    speed_tab = T.speed_table(
         {"backend": p["job"]["engine"], "dt": p["job"]["dt"], "status": "error",
          "reason": p["error"]} if "error" in p else p["row"] for p in dt_payloads)
-    timings["speed"] = time.perf_counter() - t
-
-    # 4: overturning maps at the paper's resolution (paper Figs. 4-7) ------------------------
-    t = time.perf_counter()
-    from .maps import run_maps
-
-    maps = run_maps(names, S.store_path(store_dir, "maps"), full=full, quick=quick,
-                    measured=Path(out_dir) / "engine-maps", progress=progress,
-                    workers=workers,
-                    scheduler=dask_address if executor == "dask" else None, maps=plan["maps"])
-    timings["maps"] = time.perf_counter() - t
-
-    # 5: choosing a modelling approach (the decision, the stability sweep) -----------------
-    t = time.perf_counter()
-    from .choice import run_choice
-
-    choice = run_choice(names, store_dir, quick=quick, full=full, workers=workers,
-                        progress=progress, scene=plan["choice_scene"],
-                        stress_scene=plan.get("stress_scene"),
-                        stress_hybrid=plan.get("stress_hybrid_scene"),
-                        evidence=plan.get("choice_evidence", "quick"))
-    timings["choice"] = time.perf_counter() - t
-
-    # 6: records ----------------------------------------------------------------------------
-    t = time.perf_counter()
-    records = pd.DataFrame()
-    if records_dir is not None:
-        records = _records(records_dir, plan, names, notes, store=sweep_store, **run)
-    timings["records"] = time.perf_counter() - t
-
-    # 7: fragility over an ensemble of records ----------------------------------------------
-    t = time.perf_counter()
-    frag: dict[str, Any] = {}
-    if not quick:
-        from .fragility import fragility_section
-
-        frag = fragility_section(plan["record_frames"], names, records=fragility_records,
-                                 size="full" if full else "default",
-                                 store=S.store_path(store_dir, "fragility", keyed=False),
-                                 export_dir=out / "fragility-export",
-                                 executor=executor, workers=workers, scheduler=dask_address,
-                                 progress=progress)
-    timings["fragility"] = time.perf_counter() - t
-
-    # 8: where the analytic model holds (a user's scene with its own friction) -------------
-    t = time.perf_counter()
-    validity = _validity_section(plan.get("validity_map"), names, store_dir, workers, progress)
-    timings["validity map"] = time.perf_counter() - t
 
     # tables -----------------------------------------------------------------------------
     metrics = T.metrics_table(payloads)
@@ -491,12 +432,128 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
     engines_tab = T.engine_summary(metrics, eta_summary, maps["agreement"])
     return CampaignTables(plan=dict(plan, labels=labels), names=names, states=states,
                           payloads=payloads, dt_payloads=dt_payloads, metrics=metrics, eta=eta,
-                          eta_summary=eta_summary, engines=engines_tab, speed=speed,
+                          eta_summary=eta_summary, engines=engines_tab, speed=speed_tab,
                           records=records, maps=maps, choice=choice, fragility=frag,
                           validity=validity, notes=notes, labels=labels, timings=timings,
                           quick=quick,
                           records_dir=records_dir, store_dir=store_dir,
-                          fingerprint=fingerprint, paper=paper, t_start=t_start)
+                          fingerprint=fingerprint, paper=paper, t_start=t_start,
+                          cpu_start=cpu_start)
+
+
+# ==========================================================================================
+# The parts of a campaign (each a function of the campaign's context, so that a lane of them
+# can run in another process: rockbench.sweep.executors.run_parts)
+# ==========================================================================================
+def _part_comparisons(c: dict[str, Any]) -> list[dict[str, Any]]:
+    """1 + 2: the pulse cases, the fracture cases and free rocking of every scene."""
+    plan, names = c["plan"], c["names"]
+    jobs = []
+    shapes = {(shape, int(sign)) for shape, sign in plan["pulse_shapes"]}
+    for scene in plan["scenes"]:
+        mirror = _mirror_symmetric(scene)
+        for (A, W) in plan["pulse_points"]:
+            for shape, sign in plan["pulse_shapes"]:
+                if mirror and int(sign) == -1 and (shape, 1) in shapes:
+                    continue      # the mirror image of the +1 case (Scene.mirror_symmetric)
+                jobs.append({"kind": "pulse", "scene": scene, "engines": names,
+                             "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
+                                        "A": float(A), "W": float(W)},
+                             "duration": _pulse_duration(scene, A, W, shape,
+                                                         plan["pulse_tail"])})
+    for scene, shape, sign, A, W in plan["fracture_cases"]:
+        jobs.append({"kind": "fracture", "scene": scene, "engines": names,
+                     "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
+                                "A": float(A), "W": float(W)},
+                     "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
+    for scene in plan["scenes"]:
+        jobs.append({"kind": "free", "scene": scene, "engines": names, "motion": None,
+                     "phi0_over_alpha": plan["free_phi0"], "duration": plan["free_duration"]})
+    return _comparisons(jobs, cache=c["cache"], desc="comparisons", **c["run"])
+
+
+def _mirror_symmetric(scene: Any) -> bool:
+    """Whether a plan's scene is its own mirror image (its reversed pulses are not run)."""
+    from ..scene import Scene, load_scene
+
+    return (scene if isinstance(scene, Scene) else load_scene(scene)).mirror_symmetric
+
+
+def _part_speed(c: dict[str, Any]) -> list[dict[str, Any]]:
+    """3: speed against accuracy (every engine through the plan's time steps)."""
+    plan = c["plan"]
+    dc = plan["dt_case"]
+    dur = _pulse_duration(dc["scene"], dc["A"], dc["W"], dc["shape"], plan["dt_tail"])
+    jobs = [{"kind": "dt", "scene": dc["scene"], "engine": e, "dt": float(dt),
+             "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")}},
+             "duration": dur}
+            for e in c["names"] if e != REFERENCE for dt in plan["dt_sweep"]]
+    return _comparisons(jobs, cache=c["cache"], desc="time steps", **c["run"])
+
+
+def _part_maps(c: dict[str, Any]) -> dict[str, Any]:
+    """4: overturning maps at the paper's resolution (paper Figs. 4-7)."""
+    from .maps import run_maps
+
+    run = c["run"]
+    return run_maps(c["names"], S.store_path(c["store_dir"], "maps"), full=c["full"],
+                    quick=c["quick"], measured=c["out"] / "engine-maps",
+                    progress=run["progress"], workers=run["workers"],
+                    scheduler=run["dask_address"] if run["executor"] == "dask" else None,
+                    maps=c["plan"]["maps"])
+
+
+def _part_choice(c: dict[str, Any]) -> dict[str, Any]:
+    """5: choosing a modelling approach (the decision, the stability sweep)."""
+    from .choice import run_choice
+
+    plan, run = c["plan"], c["run"]
+    return run_choice(c["names"], c["store_dir"], quick=c["quick"], full=c["full"],
+                      workers=run["workers"], progress=run["progress"],
+                      scene=plan["choice_scene"], stress_scene=plan.get("stress_scene"),
+                      stress_hybrid=plan.get("stress_hybrid_scene"),
+                      evidence=plan.get("choice_evidence", "quick"))
+
+
+def _part_records(c: dict[str, Any]) -> tuple[pd.DataFrame, list[str]]:
+    """6: records (the peak rotation per record and frame), and the notes of their folder."""
+    notes: list[str] = []
+    if c["records_dir"] is None:
+        return pd.DataFrame(), notes
+    return _records(c["records_dir"], c["plan"], c["names"], notes, store=c["sweep_store"],
+                    **c["run"]), notes
+
+
+def _part_fragility(c: dict[str, Any]) -> dict[str, Any]:
+    """7: fragility over an ensemble of records (not in the quick campaign)."""
+    if c["quick"]:
+        return {}
+    from .fragility import fragility_section
+
+    run = c["run"]
+    return fragility_section(c["plan"]["record_frames"], c["names"],
+                             records=c["fragility_records"],
+                             size="full" if c["full"] else "default",
+                             store=S.store_path(c["store_dir"], "fragility", keyed=False),
+                             export_dir=c["out"] / "fragility-export",
+                             executor=run["executor"], workers=run["workers"],
+                             scheduler=run["dask_address"], progress=run["progress"])
+
+
+def _part_validity(c: dict[str, Any]) -> dict[str, Any]:
+    """8: where the analytic model holds (a user's scene with its own friction)."""
+    return _validity_section(c["plan"].get("validity_map"), c["names"], c["store_dir"],
+                             c["run"]["workers"], c["run"]["progress"])
+
+
+#: The parts of a campaign, in the order of the page's run-time table.
+_PARTS = {"comparisons": _part_comparisons, "speed": _part_speed, "maps": _part_maps,
+          "choice": _part_choice, "records": _part_records, "fragility": _part_fragility,
+          "validity map": _part_validity}
+#: The two lanes of the local executor (the first in this process), each part's CPU measured
+#: on the paper's plan (runtime.csv) so that both lanes end near together.
+_LANES = [["comparisons", "speed", "records", "validity map"],
+          ["maps", "choice", "fragility"]]
 
 
 def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], store_dir: Path,

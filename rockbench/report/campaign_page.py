@@ -54,16 +54,17 @@ def render(sections, *, quick: bool, with_records: bool, about: str | None = Non
                          "cost." + (" (quick campaign)" if quick else ""))
 
 
-def runtime_html(timings: Mapping[str, float], total: float, workers: int,
-                 cpu_s: float) -> str:
-    """The Run time section: wall seconds per part and in total, workers, CPU seconds."""
-    items = [(f"{k} [s]", f"{v:.1f}") for k, v in timings.items()]
-    items.append(("total [s]", f"{total:.1f}"))
-    items.append(("workers", str(workers)))
-    items.append(("CPU time of the comparisons [s]", f"{cpu_s:.1f}"))
-    return (H._dl(items) + "<p>Wall-clock seconds of this run of the campaign (cases reused "
-            "from the store cost nothing here); CPU time summed over the comparison and "
-            "time-step cases, reused ones included.</p>")
+def runtime_html(timings: Mapping[str, tuple[float, float]], total: tuple[float, float],
+                 workers: int) -> str:
+    """The Run time section: per part of the campaign and in total, wall-clock seconds and
+    CPU seconds (this process and its workers), and the workers."""
+    rows = "".join(f"<tr><td>{escape(k)}</td><td>{w:.1f}</td><td>{c:.1f}</td></tr>"
+                   for k, (w, c) in timings.items())
+    rows += f"<tr><th>total</th><th>{total[0]:.1f}</th><th>{total[1]:.1f}</th></tr>"
+    return ("<table><thead><tr><th>part</th><th>wall [s]</th><th>CPU [s]</th></tr></thead>"
+            f"<tbody>{rows}</tbody></table><p>Wall-clock and CPU seconds (user + system, this "
+            f"process and its {workers} worker(s)) of each part of this run; cases reused from "
+            "the store cost nothing here.</p>")
 
 
 def band_summary_html(records, what: str = "record peaks") -> str:

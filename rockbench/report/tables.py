@@ -147,6 +147,14 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "within_band": "-, bool: the backend's peak lies in [band_low, band_high] (an overturned "
                        "run: some analytic run of the band overturns too)",
         "band_distance": "-, signed distance of the peak to the band, in alpha (0 inside)"},
+    "runtime.csv": {
+        "part": "-, a part of the campaign (comparisons, speed, maps, choice, records, "
+                "fragility, validity map, report = the page and its figures), or total",
+        "wall_s": "s, wall-clock seconds of the part in this run",
+        "cpu_s": "s, CPU seconds (user + system) of the process and its workers during the "
+                 "part (rockbench.machine.tree_cpu_s); cases reused from the store cost nothing",
+        "workers": "-, worker processes the campaign used",
+        "processor": "-, the machine's processor (rockbench.machine.cpu_name)"},
 }
 
 #: Columns of ``speed_accuracy.csv``, in order.

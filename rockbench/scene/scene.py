@@ -124,6 +124,16 @@ class Scene:
         return self.structure.p
 
     @property
+    def mirror_symmetric(self) -> bool:
+        """True when the structure is its own mirror image: a block, or a frame with equal
+        columns (its devices, defined per column alike, then mirror too). Its response to a
+        reversed horizontal ground motion is then the mirror image (phi -> -phi) of its
+        response to the motion: the same overturning verdict, peak |phi|, impacts and
+        fracture (the analytic maps use it: docs/maps.md)."""
+        st = self.structure
+        return isinstance(st, Block) or (isinstance(st, Frame) and st.symmetric)
+
+    @property
     def friction(self) -> float | None:
         """The Coulomb friction coefficient [-] of the base contacts the scene gives
         (``contact.friction``), or None: not given (each engine's default)."""

@@ -27,12 +27,13 @@ def boundary(df: pd.DataFrame) -> pd.DataFrame:
     """The minimum-overturning boundary of a map: for each (pulse, sign, frequency), the
     smallest amplitude A that overturns (NaN if none does)."""
     ok = df[df["status"] == "ok"]
-    rows = []
-    for (p, s, w), g in ok.groupby(["pulse", "sign", "frequency"], sort=True):
-        ot = g[g["overturned"].astype(bool)]
-        rows.append({"pulse": p, "sign": int(s), "frequency": float(w),
-                     "a_min": float(ot["amplitude"].min()) if len(ot) else math.nan})
-    return pd.DataFrame(rows, columns=["pulse", "sign", "frequency", "a_min"])
+    keys = ["pulse", "sign", "frequency"]
+    if not len(ok):
+        return pd.DataFrame(columns=keys + ["a_min"])
+    ok = ok.assign(sign=ok["sign"].astype(int), frequency=ok["frequency"].astype(float),
+                   a_ot=ok["amplitude"].astype(float).where(ok["overturned"].astype(bool)))
+    out = ok.groupby(keys, sort=True)["a_ot"].min().rename("a_min").reset_index()
+    return out[keys + ["a_min"]]
 
 
 #: Relative margin in A within which a cell is "near the boundary": the engines' own

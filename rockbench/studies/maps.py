@@ -329,6 +329,39 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
         raise
 
 
+def mirror_twins(cells: Sequence[tuple]) -> tuple[list[tuple], dict[str, tuple]]:
+    """``cells`` (shape, sign, A, W) of a mirror-symmetric structure
+    (:attr:`rockbench.scene.Scene.mirror_symmetric`) split into those to run and their twins:
+    a sign -1 cell whose sign +1 cell is also asked for is not run but mirrored from it
+    (:func:`with_mirrored`). Returns (cells to run, key of the +1 cell -> its -1 twin)."""
+    asked = {cell_key(*c) for c in cells}
+    run, twins = [], {}
+    for c in cells:
+        shape, sign, A, W = c
+        up = cell_key(shape, 1, A, W)
+        if sign == -1 and up in asked:
+            twins[up] = c
+        else:
+            run.append(c)
+    return run, twins
+
+
+def with_mirrored(df: pd.DataFrame, twins: dict[str, tuple]) -> pd.DataFrame:
+    """``df`` (map rows) and, for each of its sign +1 rows that has a twin in ``twins``
+    (:func:`mirror_twins`), the twin's row: the same response mirrored (phi -> -phi: verdict,
+    peak |phi|, impacts, fracture, status equal), sign -1, no CPU time of its own."""
+    keys = [cell_key(p, s, a, w) for p, s, a, w in zip(df["pulse"], df["sign"],
+                                                       df["amplitude"], df["frequency"])]
+    hit = np.array([k in twins for k in keys], dtype=bool)
+    if not hit.any():
+        return df
+    mirrored = df.loc[hit].copy()
+    mirrored["sign"] = -1
+    if "cpu_s" in mirrored:
+        mirrored["cpu_s"] = 0.0
+    return pd.concat([df, mirrored], ignore_index=True)
+
+
 def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
                method: str | None, overrides: dict | None, cells: list,
                stored: tuple[Path, pd.DataFrame] | None, executor: str,
@@ -345,10 +378,15 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
                                                          done["amplitude"], done["frequency"])}
     todo = [c for c in cells if cell_key(*c) not in have]
     reused = len(cells) - len(todo)
+    twins: dict[str, tuple] = {}
+    if engine == "analytic" and sc.mirror_symmetric:
+        todo, twins = mirror_twins(todo)
     frames = [done]
     written = [len(part_files(path)) if path is not None else 0]
 
     def on_result(_key: str, df: pd.DataFrame) -> None:
+        if twins and len(df):
+            df = with_mirrored(df, twins)
         frames.append(df)
         if path is not None and len(df):
             write_part(path, tidy_map(df))

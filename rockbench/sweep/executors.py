@@ -33,6 +33,7 @@ import contextlib
 import contextvars
 import os
 import re
+import time
 import warnings
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -41,7 +42,7 @@ from typing import Any
 from ..errors import ParameterError, RockbenchError, RockbenchWarning
 
 __all__ = ["EXECUTORS", "execute", "check_options", "cpu_count", "kept_pools", "local_workers",
-           "DASK_CONNECT_TIMEOUT"]
+           "run_parts", "DASK_CONNECT_TIMEOUT"]
 
 #: Seconds to wait for a Dask scheduler to answer before giving up (Dask's own default is 30).
 DASK_CONNECT_TIMEOUT = 5.0
@@ -131,6 +132,96 @@ def _process_pool(workers: int):
                                initargs=(os.getpid(),))
 
 
+#: The CPU account of the running part of :func:`run_parts` (a one-element list of seconds):
+#: each local pool adds its workers' CPU time when it ends; None outside a part.
+_CPU_SINK: contextvars.ContextVar[list[float] | None] = contextvars.ContextVar(
+    "rockbench_cpu_sink", default=None)
+
+
+def _account(ex) -> None:
+    """Add the CPU seconds of ``ex``'s worker processes to the running part's account."""
+    sink = _CPU_SINK.get()
+    if sink is None:
+        return
+    from ..machine import process_cpu_s
+
+    for proc in list((getattr(ex, "_processes", None) or {}).values()):
+        sink[0] += process_cpu_s(proc.pid)
+
+
+Part = tuple[Callable[..., Any], tuple]
+
+
+def _run_lane(parts: dict[str, Part], quiet: bool = False
+              ) -> tuple[dict[str, Any], dict[str, tuple[float, float]]]:
+    """Run ``parts`` (name -> (function, args)) one after the other; return their results and
+    (wall [s], CPU [s]) each: CPU of this thread plus that of its local pools' workers."""
+    if quiet:
+        from ..progress import configure
+        configure(quiet=True)
+    results: dict[str, Any] = {}
+    timings: dict[str, tuple[float, float]] = {}
+    for name, (fn, args) in parts.items():
+        sink = [0.0]
+        token = _CPU_SINK.set(sink)
+        w0, c0 = time.perf_counter(), time.thread_time()
+        try:
+            results[name] = fn(*args)
+        finally:
+            timings[name] = (time.perf_counter() - w0, time.thread_time() - c0 + sink[0])
+            _CPU_SINK.reset(token)
+    return results, timings
+
+
+def _lane_process_init(parent: int) -> None:
+    """Initializer of a lane's process: it dies with its parent (``PR_SET_PDEATHSIG``) but,
+    unlike a pool worker, answers Ctrl-C itself, ending its own pools as the parent does."""
+    import signal
+
+    _die_with_parent(parent)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def run_parts(parts: dict[str, Part], timings: dict[str, tuple[float, float]],
+              lanes: Sequence[Sequence[str]] | None = None) -> dict[str, Any]:
+    """Run independent ``parts`` (name -> (function, args), both picklable) in ``lanes``
+    (lists of names; default: one lane of every part, in order); return name -> result.
+
+    The first lane runs in this process; each other lane in a process of its own (started
+    fresh: ``spawn``), one part after the other, its own pools forked from it. Lanes keep up
+    to lanes x workers processes busy, so one part's last cases, or its work in one process,
+    do not leave a core idle. ``timings[name]`` becomes (wall [s], CPU [s]) of the part: CPU
+    of the thread that ran it plus that of the workers of its local pools. An exception in a
+    lane (Ctrl-C included) ends the other lanes' processes and is raised."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from ..progress import enabled
+
+    lanes = [list(parts)] if lanes is None else [list(lane) for lane in lanes]
+    if sorted(n for lane in lanes for n in lane) != sorted(parts):
+        raise ValueError(f"lanes {lanes} do not hold each of the parts {list(parts)} once")
+    others = []
+    try:
+        for lane in lanes[1:]:
+            ex = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),
+                                     initializer=_lane_process_init, initargs=(os.getpid(),))
+            others.append((ex, ex.submit(_run_lane, {n: parts[n] for n in lane},
+                                         not enabled())))
+        results, times = _run_lane({n: parts[n] for n in lanes[0]})
+        for ex, fut in others:
+            r, t = fut.result()
+            results.update(r)
+            times.update(t)
+            ex.shutdown(wait=True)
+    except BaseException:
+        for ex, _ in others:
+            _terminate(ex)
+        raise
+    timings.update(times)
+    return {name: results[name] for name in parts}
+
+
 #: The local pools kept by :func:`kept_pools` (size -> executor), or None outside it.
 _KEPT: contextvars.ContextVar[dict[int, Any] | None] = contextvars.ContextVar(
     "rockbench_kept_pools", default=None)
@@ -152,6 +243,7 @@ def kept_pools() -> Iterator[None]:
         pools = _KEPT.get() or {}
         _KEPT.reset(token)
         for ex in pools.values():
+            _account(ex)
             ex.shutdown(wait=True, cancel_futures=True)
 
 
@@ -255,6 +347,8 @@ def _pool(fn, items: list[Item], size: int, done, show, label, crashed) -> None:
                     kept[workers] = ex
         finished_ok = True
     finally:
+        if kept is None:
+            _account(ex)
         if not finished_ok:
             # Ctrl-C, or a result that could not be kept (a full disk): stop now. Finished
             # items are already handed over (and stored); the workers' items in flight are
