@@ -6,7 +6,8 @@ Conventions (``docs/conventions.md``): SI units, seconds, m/s^2. The ground acce
 vertical motion) or another :class:`GroundMotion` on the same clock whose acceleration
 ``a_v(t)`` [m/s^2] is vertical, positive up (+y): a pulse's vertical part is the same wavelet
 times ``vertical_ratio`` (in phase), a record's is a second channel sampled at the horizontal
-channel's times (:meth:`Record.with_vertical`). A run starts from rest at
+channel's times (:meth:`Record.with_vertical`), and any two motions pair as
+:class:`WithVertical` (horizontal, vertical). A run starts from rest at
 :attr:`GroundMotion.t_start`; after :attr:`GroundMotion.t_end` the excitation is zero (records) or
 below 1e-12 of its peak (pulses), so a solver may treat the motion as free rocking from there on.
 
@@ -40,11 +41,13 @@ from ..limits import check_in_limit
 from .motion_base import GroundMotion, _check_factor, _check_interval, _times
 from .recorded import Record
 from .units import UNIT_FACTORS, UNIT_SPELLINGS, parse_units, unit_factor
+from .with_vertical import WithVertical
 
 __all__ = [
     "GroundMotion",
     "RickerPulse",
     "Record",
+    "WithVertical",
     "UNIT_FACTORS",
     "UNIT_SPELLINGS",
     "parse_units",
