@@ -30,8 +30,8 @@ __version__ = "0.1.0"
 #: Public name -> the module (relative to this package) that defines it, imported on first use.
 _LAZY: dict[str, str] = {
     **dict.fromkeys(("Block", "Frame", "Devices", "Contact", "Scene", "GroundMotion",
-                     "RickerPulse", "Record", "load_scene", "save_scene", "load_record",
-                     "builtin_scenes", "make_pulse"),
+                     "RickerPulse", "Record", "WithVertical", "load_scene", "save_scene",
+                     "load_record", "builtin_scenes", "make_pulse"),
                     ".scene"),
     "Result": ".result",
     **dict.fromkeys(("run", "info"), ".runner"),
@@ -42,7 +42,8 @@ _LAZY: dict[str, str] = {
 }
 
 __all__ = ["Block", "Frame", "Devices", "Contact", "Scene", "GroundMotion", "RickerPulse", "Record",
-           "Result", "load_scene", "save_scene", "load_record", "builtin_scenes", "make_pulse", "run", "info",
+           "WithVertical", "Result", "load_scene", "save_scene", "load_record", "builtin_scenes",
+           "make_pulse", "run", "info",
            "compare", "Comparison", "get_backend", "backend_names", "available_backends", "engine_info",
            "RockbenchError", "ParameterError", "SceneError", "RecordError", "plot_history",
            "plot_map", "plot_work_precision", "__version__"]
@@ -69,4 +70,5 @@ if TYPE_CHECKING:  # what static tools see (the same names, imported eagerly)
     from .result import Result
     from .runner import info, run
     from .scene import (Block, Contact, Devices, Frame, GroundMotion, Record, RickerPulse,
-                        Scene, builtin_scenes, load_record, load_scene, make_pulse, save_scene)
+                        Scene, WithVertical, builtin_scenes, load_record, load_scene,
+                        make_pulse, save_scene)

@@ -79,7 +79,9 @@ def _check_map(frame: Any, name: str) -> pd.DataFrame:
 def plot_map(frame: pd.DataFrame, *, compare: pd.DataFrame | None = None,
              title: str | None = None, name: str | None = None) -> Figure:
     """An overturning map: four panels (symmetric / antisymmetric pulse, sign + / -) on W (x)
-    and A (y); red overturns, blue shades max |phi| / alpha of a surviving structure.
+    and A (y); red overturns, blue shades max |phi| / alpha of a surviving structure, hatched
+    cells lie outside the analytic model (its ``outside`` column); the default title names a
+    vertical ratio (``attrs["vertical_ratio"]`` of :func:`rockbench.studies.maps.run_map`).
 
     With ``compare`` (a map of the same cells by another backend) the figure shows that
     backend's verdicts as markers over this map (``frame`` is then the reference, usually the
@@ -88,9 +90,11 @@ def plot_map(frame: pd.DataFrame, *, compare: pd.DataFrame | None = None,
     """
     from .report.map_figures import plot_map_overlay, plot_map_panels
 
+    ratio = float(getattr(frame, "attrs", {}).get("vertical_ratio", 0.0) or 0.0)
     frame = _check_map(frame, "frame")
-    if compare is None:
-        return plot_map_panels(frame, title=title or "overturning map")
+    if compare is None:               # a map run with a vertical part says so (run_map's attrs)
+        return plot_map_panels(frame, title=title or "overturning map" + (
+            f", a_v = {ratio:g} a_g" if ratio else ""))
     compare = _check_map(compare, "compare")
     if name is None:
         name = str(compare["backend"].iloc[0]) if "backend" in compare.columns else "compared"

@@ -392,12 +392,18 @@ def motion_label(motion: Mapping[str, Any] | None, *, long: bool = False) -> str
     T_g = 1.09 s)"``, ``"record LA21 (scale -1)"``. A and W are a_g / (g tan alpha) and
     omega_g / p; a_g in m/s^2, T_g in s. A vertical component adds ``" V=0.5"`` (short) or
     ``", vertical part 0.5 x horizontal"`` (long) to a pulse, and its channel's name to a
-    record (``"TCU052-N & TCU052-V"``, ``"record TCU052-N with vertical TCU052-V"``).
+    record (``"TCU052-N & TCU052-V"``, ``"record TCU052-N with vertical TCU052-V"``); any
+    other vertical motion (:class:`~rockbench.scene.motion.WithVertical`, whose description
+    nests it under ``vertical``) its own label (``"still & vertical symm+ a=5.9 m/s2 T=0.3 s"``).
     """
     m = dict(motion or {"kind": "none"})
     kind = m.get("kind", "none")
     if kind == "none":
         return "free rocking"
+    if isinstance(m.get("vertical"), Mapping):     # a WithVertical: any two motions
+        v = motion_label(m.pop("vertical"), long=long)
+        return (motion_label(m, long=long)
+                + (f", with vertical {v}" if long else f" & vertical {v}"))
     if kind == "ricker":
         shape, sign = str(m.get("shape", "symmetric")), int(m.get("sign", 1))
         amp = m.get("amplitude_m_s2", m.get("amplitude"))

@@ -247,6 +247,165 @@ def test_resolve_records(tmp_path):
 
 
 # ---------------------------------------------------------------------------------------------
+# vertical ground motion: a records.csv's channels, or --vertical RATIO
+# ---------------------------------------------------------------------------------------------
+def _with_vertical_channel(folder, down=1.2):
+    """The tiny records, TINY1 with a listed vertical channel TINY1V (headerless, cm/s^2, dt
+    0.01 s): a downward half-sine of ``down`` g over 0.5-1.0 s (down > 1: the ground falls
+    faster than gravity there)."""
+    _write_tiny_records(folder)
+    t = np.arange(0.0, 2.0, 0.01)
+    v = np.where((t >= 0.5) & (t <= 1.0), -down * 980.665 * np.sin(2 * math.pi * (t - 0.5)),
+                 0.0)
+    np.savetxt(folder / "TINY1V.dat", v.reshape(-1, 4), fmt="%.6e")
+    (folder / "records.csv").write_text("record,npts,dt_s,units,vertical\n"
+                                        "TINY1,200,0.01,cm/s^2,TINY1V\n"
+                                        "TINY2,200,0.01,cm/s^2,\n")
+    return folder
+
+
+FAST = dict(engines=["analytic"], scales="1:2:2", executor="serial", progress=False,
+            n_boot=20, numerical=None)
+
+
+def _peak(scene, motion, scale):
+    import rockbench as rb
+
+    return rb.run(scene, motion.scaled(scale), method="compiled").summary
+
+
+def test_a_records_csv_names_each_records_vertical_channel(tmp_path):
+    """A ``vertical`` column names a record's vertical channel: the channel is not a record of
+    its own, every run of that record carries it (each run is the run of the record with its
+    channel, scaled and reversed with it), the analysis says which records carry one, and the
+    runs outside the model follow the one rule with it (here the ground falls faster than
+    gravity as recorded: outside, though the PGA alone is far below mu g)."""
+    import rockbench as rb
+    from rockbench.scene.records import load_record
+    from rockbench.studies.fragility import fragility_cases
+    from rockbench.validity import motion_validity
+
+    d = _with_vertical_channel(tmp_path / "recs")
+    recs = resolve_records(d)
+    assert [r["name"] for r in recs] == ["TINY1", "TINY2"]
+    assert recs[0]["vertical"] == str((d / "TINY1V.dat").resolve())
+    assert (recs[0]["vertical_dt"], recs[0]["vertical_units"]) == (0.01, "cm/s2")
+    assert "vertical" not in recs[1]
+    cases = fragility_cases("paper-asymmetric", recs, ["analytic"], [1.0])
+    assert all(c["motion"]["vertical_path"] == recs[0]["vertical"] for c in cases[:2])
+    assert all("vertical_path" not in c["motion"] for c in cases[2:])
+    f = run_fragility("paper-asymmetric", d, **FAST)
+    v = f.analysis["vertical"]
+    assert (v["recorded"], v["scaled"], v["horizontal"]) == (["TINY1"], [], ["TINY2"])
+    assert "recorded vertical channel of 1 of 2 records" in v["text"]
+    scene = rb.load_scene("paper-asymmetric")
+    rec = load_record(d / "TINY1.dat", vertical=d / "TINY1V.dat", vertical_dt=0.01,
+                      vertical_units="cm/s2")
+    for r in f.runs[f.runs["record"] == "TINY1"].itertuples():
+        s = _peak(scene, rec, r.polarity * r.scale)
+        assert r.peak == s.max_abs_phi_over_alpha
+        assert r.outside == (not motion_validity(scene, rec,
+                                                 scale=r.polarity * r.scale).inside)
+    t1 = f.runs[f.runs["record"] == "TINY1"]         # reversed, the channel pushes up
+    assert list(t1["outside"]) == list(t1["polarity"] == 1)
+    assert not f.runs[f.runs["record"] == "TINY2"]["outside"].any()
+    assert "falls faster than gravity (g + a_v <= 0)" in f.analysis["validity"]["text"]
+    flat = run_fragility("paper-asymmetric", _write_tiny_records(tmp_path / "flat"), **FAST)
+    assert "vertical" not in flat.analysis
+    assert not np.allclose(flat.runs["peak"].iloc[:4], t1["peak"])      # the channel matters
+
+
+def test_vertical_ratio_gives_the_other_records_their_scaled_horizontal(tmp_path):
+    """``vertical=r``: a record without a channel of its own runs with a_v = r u_g'' in every
+    run (its run is the run of Record.with_vertical_ratio(r)); one with a recorded channel
+    keeps it; the analysis and the command's JSON say which."""
+    import rockbench as rb
+    from rockbench.scene.records import load_record
+
+    d = _with_vertical_channel(tmp_path / "recs", down=0.3)
+    f = run_fragility("paper-asymmetric", d, vertical=0.5, **FAST)
+    v = f.analysis["vertical"]
+    assert (v["ratio"], v["recorded"], v["scaled"], v["horizontal"]) == (
+        0.5, ["TINY1"], ["TINY2"], [])
+    assert "a_v = 0.5 u_g''" in v["text"] and "for the other 1" in v["text"]
+    scene = rb.load_scene("paper-asymmetric")
+    rec = load_record(d / "TINY2.dat", dt=0.01, units="cm/s2").with_vertical_ratio(0.5)
+    np.testing.assert_allclose(rec.vertical.samples, 0.5 * rec.samples, rtol=1e-15)
+    for r in f.runs[f.runs["record"] == "TINY2"].itertuples():
+        assert r.peak == _peak(scene, rec, r.polarity * r.scale).max_abs_phi_over_alpha
+    for bad in (3.5, -0.1, True):
+        with pytest.raises(ParameterError, match="vertical"):
+            run_fragility("paper-asymmetric", d, vertical=bad, **FAST)
+
+
+def test_vertical_ratio_on_the_synthetic_ensemble(tmp_path):
+    """The synthetic ensemble has no vertical channel: ``vertical=r`` gives each of its
+    records a_v = r u_g'' in every run, and the runs differ from the horizontal ones."""
+    from rockbench.sweep.store import load_store
+
+    kw = dict(FAST, scales="1:1:1", tail=5.0, store=tmp_path / "store", keyed_by_code=False)
+    f = run_fragility("paper-asymmetric", "synthetic:n=1,seed=3", vertical=2.0, **kw)
+    assert f.analysis["ensemble"]["kind"] == "synthetic"
+    assert f.analysis["vertical"]["scaled"] == list(f.records["record"])
+    rows = load_store(tmp_path / "store")
+    assert (rows["motion.vertical_ratio"].dropna() == 2.0).sum() == len(f.runs) == 2
+    flat = run_fragility("paper-asymmetric", "synthetic:n=1,seed=3", **kw)
+    assert "vertical" not in flat.analysis
+    assert not np.allclose(flat.runs["peak"], f.runs["peak"])
+
+
+def test_without_vertical_motion_the_cases_are_unchanged(tmp_path):
+    """No channel listed and no ratio (None or 0): the cases are those of a horizontal
+    ensemble key for key (the store's ids unchanged), no ``vertical`` in the analysis, the
+    info or the JSON, and ``outside`` is the PGA rule."""
+    from rockbench.cli.fragility import summary
+    from rockbench.studies.fragility import fragility_cases
+    from rockbench.sweep.cases import case_id
+    from rockbench.validity import pga_limit
+    import rockbench as rb
+
+    d = _write_tiny_records(tmp_path / "recs")
+    recs = resolve_records(d)
+    for c in fragility_cases("paper-asymmetric", recs, ["analytic"], [1.0]):
+        assert set(c["motion"]) == {"kind", "path", "scale", "dt", "units"}
+    a = fragility_cases("paper-asymmetric", recs, ["analytic"], [1.0, 2.0])
+    b = fragility_cases("paper-asymmetric", recs, ["analytic"], [1.0, 2.0], vertical=0.0)
+    assert [case_id(c) for c in a] == [case_id(c) for c in b]
+    f0 = run_fragility("paper-asymmetric", d, **FAST)
+    f1 = run_fragility("paper-asymmetric", d, vertical=0.0, **FAST)
+    pd.testing.assert_frame_equal(f0.runs.drop(columns="cpu_s"), f1.runs.drop(columns="cpu_s"))
+    for f in (f0, f1):
+        assert "vertical" not in f.analysis and "vertical" not in f.info
+        assert "vertical" not in summary(f)
+    pga = dict(zip(f0.records["record"], f0.records["pga"]))
+    lim = pga_limit(rb.load_scene("paper-asymmetric"))
+    assert list(f0.runs["outside"]) == [s * pga[r] > lim for r, s in
+                                        zip(f0.runs["record"], f0.runs["scale"])]
+
+
+def test_cli_vertical(tmp_path, capsys):
+    """--vertical RATIO: out of [0, 3] one line naming it; the JSON and the text say which
+    records carry which vertical motion."""
+    from rockbench.cli.main import main
+
+    d = _write_tiny_records(tmp_path / "recs")
+    base = ["fragility", "paper-asymmetric", "--records", str(d), "--engine", "analytic",
+            "--scales", "1:2:2", "--store", str(tmp_path / "store"), "--workers", "1",
+            "--boot", "20", "--no-numerical"]
+    for bad in ("3.5", "-1", "x"):
+        assert main(base + ["--vertical", bad]) == 2
+        err = capsys.readouterr().err
+        assert "--vertical" in err and len(err.strip().splitlines()) == 1, err
+    assert main(base + ["--vertical", "0.5", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["vertical"]["ratio"] == 0.5 and out["vertical"]["scaled"] == ["TINY1", "TINY2"]
+    assert main(base + ["--vertical", "0.5", "--quiet"]) == 0
+    assert "a_v = 0.5 u_g''" in capsys.readouterr().out
+    assert main(base + ["--json"]) == 0
+    assert "vertical" not in json.loads(capsys.readouterr().out)
+
+
+# ---------------------------------------------------------------------------------------------
 # the driver: resumable
 # ---------------------------------------------------------------------------------------------
 def test_resume_after_an_interruption(tmp_path, monkeypatch):
@@ -344,6 +503,11 @@ def test_section_html_and_table(tmp_path):
     assert "pymunk: distinguishable from the analytic model" in html
     assert {p.name for p in tmp_path.iterdir()} == {"fragility_0.png", "fragility_peaks_0.png",
                                                     "fragility_fig9.png"}
+    assert "Vertical ground motion" not in html
+    a_v = dict(a, vertical={"text": "Vertical ground motion in every run: a_v = 0.5 u_g''"})
+    assert "Vertical ground motion in every run: a_v = 0.5 u_g" in fragility_html(
+        {**section, "fig9": False, "frames": [dict(section["frames"][0], analysis=a_v)]},
+        tmp_path / "v")
     tab = section_table(section)
     assert tab["backend"].tolist() == ["analytic", "pymunk"]
     assert tab.loc[1, "median_difference"] < -0.3     # the weaker engine: an earlier median

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -41,7 +42,7 @@ def analytic_map(tmp_path_factory):
 
 def test_analytic_map_columns_and_physics(analytic_map):
     df, _ = analytic_map
-    assert list(df.columns) == list(MAP_COLUMNS) and len(df) == 100
+    assert list(df.columns) == list(MAP_COLUMNS) + ["outside"] and len(df) == 100
     assert (df["status"] == "ok").all()
     ot = df["overturned"].astype(bool)
     assert 0 < ot.sum() < len(df)                  # both regions present
@@ -96,7 +97,8 @@ def test_interrupted_map_resumes_to_the_uninterrupted_one(analytic_map, tmp_path
     pd.testing.assert_frame_equal(
         pd.read_parquet(copy).sort_values(list(full.columns[:4])).reset_index(drop=True)
         .drop(columns="cpu_s"),
-        full.sort_values(list(full.columns[:4])).reset_index(drop=True).drop(columns="cpu_s"),
+        full.sort_values(list(full.columns[:4])).reset_index(drop=True)
+        .drop(columns=["cpu_s", "outside"]),                # outside is not stored
         check_dtype=False)
 
 
@@ -432,3 +434,159 @@ def test_a_mirror_symmetric_structure_runs_one_sign_and_mirrors_the_other(
     assert a["overturned"].astype(bool).any() or a["max_abs_phi_over_alpha"].max() > 0.5
     n_free = int((a.loc[a["sign"] == -1, "cpu_s"] == 0.0).sum())   # mirrored: no CPU
     assert n_free == (9 * 7 * 2 if mirrored else 0)
+
+
+# ------------------------------------------------------------------------------------------
+# Vertical ground motion: every cell's pulse with a_v = r u_g''
+# ------------------------------------------------------------------------------------------
+VGRID = dict(grid=(3, 3), amplitude="2:8", frequency="3:9", pulses="symmetric+,antisymmetric-",
+             tail=0.5, progress=False)
+
+
+def _pulse(scene, row, ratio):
+    return rb.RickerPulse.dimensionless(row.amplitude, row.frequency, scene.structure,
+                                        row.pulse, int(row.sign), vertical_ratio=ratio)
+
+
+def test_a_vertical_map_runs_every_cell_with_its_vertical_part(tmp_path):
+    """run_map(vertical=0.5): each row is the run of its pulse with a_v = 0.5 u_g'' (the
+    summary of rb.run on that pulse, to the last bit), on both analytic paths alike; the
+    vertical part changes the answer; the store keeps the ratio and refuses another one, in
+    either direction, saying which."""
+    import json
+
+    from rockbench.studies.maps import cell_duration
+
+    scene = rb.load_scene("paper-asymmetric")
+    store = tmp_path / "v.parquet"
+    v = run_map("paper-asymmetric", store=store, vertical=0.5, **VGRID)
+    assert v.attrs["vertical_ratio"] == 0.5 and (v["status"] == "ok").all() and len(v) == 18
+    assert "overturning map, a_v = 0.5 a_g" in rb.plot_map(v)._suptitle.get_text()
+    for row in v.iloc[[0, 4, 8, 13, 17]].itertuples():
+        r = rb.run(scene, _pulse(scene, row, 0.5), method="compiled",
+                   duration=cell_duration(scene, row.frequency, 0.5))
+        assert r.summary.max_abs_phi_over_alpha == row.max_abs_phi_over_alpha
+        assert (r.summary.overturned, r.summary.n_impacts) == (row.overturned, row.n_impacts)
+    ref = run_map("paper-asymmetric", method="solve_ivp", vertical=0.5, workers=1, **VGRID)
+    assert map_agreement(ref, v)["fraction"] == 1.0
+    np.testing.assert_allclose(ref["max_abs_phi_over_alpha"], v["max_abs_phi_over_alpha"],
+                               rtol=0, atol=1e-6)
+    flat = run_map("paper-asymmetric", store=tmp_path / "h.parquet", **VGRID)
+    assert flat.attrs["vertical_ratio"] == 0.0
+    rel = np.abs(v["max_abs_phi_over_alpha"] / flat["max_abs_phi_over_alpha"] - 1)
+    assert rel.max() > 0.05                      # the vertical part matters
+    inputs = json.loads((store / "_inputs.json").read_text())
+    assert inputs["vertical_ratio"] == 0.5
+    assert "vertical_ratio" not in json.loads((tmp_path / "h.parquet" / "_inputs.json")
+                                              .read_text())   # a horizontal store: as before
+    assert run_map("paper-asymmetric", store=store, vertical=0.5, **VGRID).attrs["reused"] == 18
+    for ratio, said in ((0.7, r"vertical_ratio=0.5 \(now 0.7\)"),
+                        (0.0, r"vertical_ratio=0.5 \(now 0.0\)")):
+        with pytest.raises(rb.RockbenchError, match=said):
+            run_map("paper-asymmetric", store=store, vertical=ratio, **VGRID)
+    with pytest.raises(rb.RockbenchError, match=r"vertical_ratio=0.0 \(now 0.5\)"):
+        run_map("paper-asymmetric", store=tmp_path / "h.parquet", vertical=0.5, **VGRID)
+    for bad in (-0.1, 3.5, math.nan, True, None):
+        with pytest.raises(rb.ParameterError, match="vertical"):
+            run_map("paper-asymmetric", vertical=bad, **VGRID)
+
+
+def test_the_cells_outside_the_model_are_those_of_the_one_rule():
+    """The column ``outside`` is rockbench.validity.motion_validity of each cell's own pulse
+    (its own W) with the scene's friction: with r = 3 the ground falls faster than gravity on a
+    downward lobe of the larger pulses (g + a_v <= 0), others ask the base for more than
+    mu = 0.6; the smallest stay inside. Without vertical motion: PGA > mu g."""
+    from rockbench.validity import motion_validity
+
+    scene = rb.load_scene("paper-asymmetric", {"contact.friction": 0.6})
+    kw = dict(grid=(8, 1), amplitude="1:8", frequency="3:3", pulses="all", tail=0.5,
+              progress=False)
+    reasons = set()
+    for ratio in (3.0, 0.0):
+        df = run_map(scene, vertical=ratio, **kw)
+        assert df.attrs["outside"] == int(df["outside"].sum())
+        for row in df.itertuples():
+            val = motion_validity(scene, _pulse(scene, row, ratio))
+            assert row.outside == (not val.inside), (ratio, row)
+            reasons.add((ratio, "falls faster" in val.reason, "slides" in val.reason))
+    assert {(3.0, True, False), (3.0, False, True), (3.0, False, False),
+            (0.0, False, True), (0.0, False, False)} <= reasons
+
+
+def test_an_engine_map_moves_the_ground_vertically():
+    """Engine cells carry the vertical part: each row of a pymunk map with r = 0.5 is pymunk's
+    run under that pulse, and differs from the horizontal map's."""
+    pytest.importorskip("pymunk")
+    from rockbench.studies.maps import cell_duration
+
+    scene = rb.load_scene("paper-asymmetric")
+    kw = dict(VGRID, grid=(2, 2), pulses="symmetric+")
+    e = run_map("paper-asymmetric", "pymunk", vertical=0.5, workers=1, **kw)
+    assert (e["status"] == "ok").all() and e.attrs["vertical_ratio"] == 0.5
+    for row in e.itertuples():
+        r = rb.run(scene, _pulse(scene, row, 0.5), engine="pymunk",
+                   duration=cell_duration(scene, row.frequency, 0.5))
+        assert r.summary.max_abs_phi_over_alpha == pytest.approx(row.max_abs_phi_over_alpha,
+                                                                 rel=1e-12)
+    flat = run_map("paper-asymmetric", "pymunk", workers=1, **kw)
+    assert not np.allclose(flat["max_abs_phi_over_alpha"], e["max_abs_phi_over_alpha"],
+                           rtol=1e-3)
+
+
+def test_map_command_line_vertical(tmp_path, capsys, monkeypatch):
+    """--vertical RATIO: out of [0, 3] one line naming it; the JSON and the text say the
+    ratio and the cells outside the model; the default store is the ratio's own; the figure's
+    title names the ratio."""
+    import json
+
+    from rockbench.cli.main import main
+    from rockbench.report import map_figures
+
+    monkeypatch.chdir(tmp_path)
+    cells = ["--grid", "2x2", "--amplitude", "2:8", "--frequency", "3:6", "--pulses",
+             "symmetric+"]
+    for bad in ("3.5", "-1", "nan", "x"):
+        assert main(["map", "paper-asymmetric", *cells, "--vertical", bad]) == 2
+        err = capsys.readouterr().err
+        assert "--vertical" in err and len(err.strip().splitlines()) == 1, err
+    titles = []
+    real = map_figures.plot_map_panels
+    monkeypatch.setattr(map_figures, "plot_map_panels",
+                        lambda df, *, title: titles.append(title) or real(df, title=title))
+    assert main(["map", "paper-asymmetric", *cells, "--vertical", "0.5", "--figure", "v.png",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["vertical_ratio"] == 0.5 and out["outside"] == 0 and out["cells"] == 4
+    assert out["store"] == str(Path("maps") / "paper-asymmetric_analytic_vertical0.5.parquet")
+    assert titles == ["paper-asymmetric, analytic, a_v = 0.5 a_g"]
+    assert main(["map", "paper-asymmetric", *cells, "--set", "contact.friction=0.2"]) == 0
+    text = capsys.readouterr().out
+    assert "4 cells (0 reused from maps/paper-asymmetric_analytic.parquet)" in text
+    assert "outside the analytic model" in text
+
+
+def test_compare_marks_the_boundary_of_a_vertical_map_with_its_ratio(tmp_path, capsys):
+    """``map --compare`` of an analytic vertical map marks the cells near its boundary by
+    re-running them with the store's own vertical ratio (horizontal pulses would mark another
+    boundary: here one cell differs)."""
+    import json
+
+    from rockbench.cli.main import main
+    from rockbench.studies.map_agreement import mark_near_boundary
+
+    scene = rb.load_scene("paper-asymmetric")
+    kw = dict(grid=(12, 3), amplitude="3:7", frequency="3:6", pulses="symmetric+", tail=0.5,
+              progress=False)
+    store = tmp_path / "v.parquet"
+    v = run_map("paper-asymmetric", store=store, vertical=0.8, **kw)
+    near = mark_near_boundary(v, scene, tail=0.5, vertical=0.8)["near_boundary"]
+    flat = mark_near_boundary(v, scene, tail=0.5)["near_boundary"]
+    assert (near != flat).any()
+    for row, is_near in zip(v.itertuples(), near):
+        flips = [run_map("paper-asymmetric", vertical=0.8, **dict(
+            kw, grid=(1, 1), amplitude=f"{row.amplitude * f}:{row.amplitude * f}",
+            frequency=f"{row.frequency}:{row.frequency}"))["overturned"].iloc[0]
+            != row.overturned for f in (0.98, 1.02)]
+        assert is_near == any(flips)
+    assert main(["map", "--compare", str(store), str(store), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["near_boundary"] == int(near.sum())

@@ -154,7 +154,7 @@ def test_a_map_whose_engine_cells_all_fail_is_data_not_a_traceback(tmp_path):
     df = run_map("paper-asymmetric", "pymunk", settings={"no_such_setting": 1}, progress=False,
                  workers=1, store=tmp_path / "m.parquet", grid=(2, 1), amplitude="2:8",
                  frequency="4:4", pulses="symmetric+", tail=0.1)
-    assert list(df.columns) == list(MAP_COLUMNS) and len(df) == 2
+    assert list(df.columns) == list(MAP_COLUMNS) + ["outside"] and len(df) == 2
     assert (df["status"] == "error").all() and df["overturned"].isna().all()
     assert len(load_map(tmp_path / "m.parquet")) == 2
 

@@ -410,6 +410,34 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
                   events=events, summary=summary, cost=cost, settings=sdict)
 
 
+def _each_pulse(scene, vr, geo, sc, shapes, signs, As, Ws, dur, rtol, atol, v_rest, thr_p, thr_n,
+                rp, A, B, C, E3, E5, Dd, ns, _sym, _anti, _beta, _xfac, res) -> None:
+    """The cells of :func:`run_pulse_grid` with a vertical part r = ``vr``: per cell, the
+    pulse (:meth:`RickerPulse.dimensionless`), its motion arrays, its end (the window, or
+    where the ground falls faster than gravity, :func:`rockbench.validity.lift_off_time`) and
+    one call of the run kernel (no history, no events) into ``res[i]``."""
+    dummy = np.zeros(1)
+    evf = np.zeros((1, 5))
+    evi = np.zeros((1, 2), dtype=np.int64)
+    hist = np.zeros((1, 2))
+    hmode = np.zeros((1, 2), dtype=np.int64)
+    for i in range(shapes.shape[0]):
+        pulse = RickerPulse.dimensionless(float(As[i]), float(Ws[i]), scene.structure,
+                                          "symmetric" if shapes[i] == 1 else "antisymmetric",
+                                          int(signs[i]), vertical_ratio=vr)
+        mk, mp, rt, ra, ext, suf, rsuf = _motion_arrays(pulse)
+        t0, m_end = float(pulse.t_start), float(pulse.t_end)
+        t_end = t0 + (dur if dur > 0.0 else (m_end - t0) + FREE_TAIL)
+        t_lift = lift_off_time(pulse, t0, t_end)
+        if t_lift is not None:
+            t_end = t_lift
+        out = np.zeros(_NOUT)
+        _run(geo, sc, mk, mp, rt, ra, ext, suf, rsuf, t0, t_end, 0.0, 0.0, rtol, atol, v_rest,
+             thr_p, thr_n, m_end, rp[0], rp[1], rp[2], int(rp[3]), int(rp[4]), A, B, C, E3, E5,
+             Dd, ns, False, evf, evi, False, dummy, hist, hmode, out)
+        res[i, :] = out
+
+
 def _history(scene, geo, sc, mot, tg, phi, phid, mode, intact, settings) -> pd.DataFrame:
     """The history frame: the solver's own column builder (one formula for both paths)."""
     from .solver import history_frame
@@ -424,7 +452,7 @@ def _history(scene, geo, sc, mot, tg, phi, phid, mode, intact, settings) -> pd.D
 def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = None,
                    rest_ratio: float | None = None, rtol: float = 1e-10,
                    atol: float = 1e-12, parallel: bool = False,
-                   eta_factor: float = 1.0) -> pd.DataFrame:
+                   eta_factor: float = 1.0, vertical_ratio: float = 0.0) -> pd.DataFrame:
     """Overturning-map cells of ``scene`` under Ricker pulses, without building Results.
 
     Parameters
@@ -438,6 +466,13 @@ def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = No
         rest_ratio None means :data:`rockbench.analytic.rules.REST_RATIO`, read at the call).
     parallel : bool
         Loop over cells with ``numba.prange`` (threads) instead of serially.
+    vertical_ratio : float
+        r in [0, 3] (limit ``vertical_ratio``): every pulse also moves the ground vertically,
+        a_v = r u_g'' (:class:`~rockbench.scene.motion.RickerPulse` ``vertical_ratio``). The
+        grid kernel builds horizontal pulses only, so with r > 0 each cell is one call of the
+        run kernel on the pulse built in Python (:func:`simulate_compiled`'s integration,
+        ending where the ground falls faster than gravity, without its history, events and
+        Result), serially (``parallel`` is not used).
 
     Returns a frame with :data:`MAP_COLUMNS`, one row per cell in the order given. ``status`` is
     "ok" or "invalid" (``reason`` says why the kernel could not advance); ``cpu_s`` is the
@@ -471,11 +506,16 @@ def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = No
         rest_ratio = rules.REST_RATIO
     v_rest = check_positive("rest_ratio", rest_ratio) * sc[13] * sc[12]
     rp = _rule_params(sc)
+    from ..limits import check_in_limit
+
+    vr = check_in_limit("vertical_ratio", "vertical_ratio", vertical_ratio)
     res = np.zeros((n, _NOUT))
     args = (geo, sc, shapes, signs, As, Ws, dur, float(rtol), float(atol), v_rest, thr_p, thr_n,
             rp, _A, _B, _C, _E3, _E5, _D, _NS, _SYM_EXT, _ANTI_EXT, _BETA, _XFAC, res)
     with CpuClock() as clock:          # a first call's kernel loading is not a cell's cost
-        if n and parallel:
+        if n and vr:
+            _each_pulse(scene, vr, *args)
+        elif n and parallel:
             # cells differ in cost by orders of magnitude (at rest vs. long rocking): hand them
             # out in small chunks rather than one contiguous block per thread
             with numba.parallel_chunksize(8):

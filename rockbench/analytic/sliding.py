@@ -2,7 +2,8 @@
 
 A rigid block rests on a horizontal foundation with Coulomb friction, one coefficient ``mu``
 (static = kinetic). The foundation accelerates horizontally, a_g(t) [m/s^2] (positive to the
-right, ``docs/conventions.md``), and optionally vertically, a_v(t) [m/s^2] (positive up). In the
+right, ``docs/conventions.md``), and optionally vertically, a_v(t) [m/s^2] (positive up: by
+default the motion's own vertical part, ``GroundMotion.vertical``). In the
 foundation's frame the block feels the inertial force -m (a_g, a_v) and gravity -m g, so the
 normal force is m n(t) with n = g + a_v [m/s^2]. The unknown is the block's displacement
 relative to the foundation, u(t) [m] (positive to the right), with v = u' [m/s]:
@@ -65,7 +66,7 @@ from ..errors import ParameterError, check_finite, check_positive
 from ..scene.motion import GroundMotion, Record
 from . import rules
 
-__all__ = ["SlidingSummary", "SlidingResult", "sliding_response",
+__all__ = ["SlidingSummary", "SlidingResult", "sliding_response", "MOTION_VERTICAL",
            "rectangular_pulse_displacement"]
 
 #: Integrator settings of the smooth path (DOP853): relative and absolute tolerances [-, m].
@@ -415,19 +416,30 @@ def _segments(motions: list[GroundMotion], t0: float, t_motion: float, t_stop: f
     return segs
 
 
-def sliding_response(horizontal: GroundMotion, mu: float, vertical: GroundMotion | None = None,
-                     *, t_end: float | None = None, output_dt: float = OUTPUT_DT,
+#: ``sliding_response(..., vertical=MOTION_VERTICAL)`` (the default): the motion's own vertical
+#: part, ``horizontal.vertical`` (None when it has none).
+MOTION_VERTICAL = "motion"
+
+
+def sliding_response(horizontal: GroundMotion, mu: float,
+                     vertical: GroundMotion | str | None = MOTION_VERTICAL, *,
+                     t_end: float | None = None, output_dt: float = OUTPUT_DT,
                      method: str = "auto", max_step: float | None = None) -> SlidingResult:
     """The rigid block's slip u(t) relative to the foundation (Newmark 1965), exact.
 
     Parameters
     ----------
     horizontal : GroundMotion
-        a_g(t) [m/s^2], positive to the right.
+        a_g(t) [m/s^2], positive to the right (its ``acceleration``; a vertical part it carries
+        is the default of ``vertical``).
     mu : float
         Coulomb friction coefficient [-] (static = kinetic), > 0.
-    vertical : GroundMotion or None
-        a_v(t) [m/s^2], positive up; normal force m (g + a_v). None: no vertical motion.
+    vertical : GroundMotion, None or "motion"
+        a_v(t) [m/s^2], positive up; normal force m (g + a_v). "motion" (default,
+        :data:`MOTION_VERTICAL`): the motion's own vertical part, ``horizontal.vertical`` (a
+        pulse's ``vertical_ratio``, a record's vertical channel, a
+        :class:`~rockbench.scene.motion.WithVertical`'s; none when it has none). A
+        GroundMotion: that one instead. None: no vertical motion, whatever the motion carries.
     t_end : float or None
         End of the run [s] (> start). None: the motions' end, or later the time the block comes
         to rest after them (so the final displacement is the permanent slip).
@@ -448,8 +460,11 @@ def sliding_response(horizontal: GroundMotion, mu: float, vertical: GroundMotion
     """
     if not isinstance(horizontal, GroundMotion):
         raise ParameterError("horizontal", horizontal, "a GroundMotion (a_g(t) [m/s^2])")
+    if isinstance(vertical, str) and vertical == MOTION_VERTICAL:
+        vertical = getattr(horizontal, "vertical", None)
     if vertical is not None and not isinstance(vertical, GroundMotion):
-        raise ParameterError("vertical", vertical, "a GroundMotion (a_v(t) [m/s^2]) or None")
+        raise ParameterError("vertical", vertical, "a GroundMotion (a_v(t) [m/s^2]), None (no "
+                             f"vertical motion) or {MOTION_VERTICAL!r} (the motion's own)")
     mu = check_positive("mu", mu)
     output_dt = check_positive("output_dt", output_dt)
     if method not in ("auto", "exact", "ivp"):

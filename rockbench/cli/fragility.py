@@ -4,8 +4,8 @@ only; the work is :mod:`rockbench.studies.fragility`.
     rockbench fragility SCENE --records DIR|FILE|NAME ... [--engine E ...] [--scales LO:HI:N]
                         [--intensity pga|pgv|pga_norm|pgv_norm|sa] [--boot N] [--seed S]
                         [--setting ENGINE.KEY=VALUE ...] [--dt S] [--set KEY=VALUE ...]
-                        [--tail S] [--no-numerical] [--export DIR] [--json] [--store DIR]
-                        [--workers N | --scheduler ADDR] [-q]
+                        [--tail S] [--vertical RATIO] [--no-numerical] [--export DIR] [--json]
+                        [--store DIR] [--workers N | --scheduler ADDR] [-q]
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from typing import Any
 
 from ..studies.intensity import MEASURES
 from .common import (add_engine_option, add_quiet_option, add_setting_option, arg_count,
-                     arg_key_value, print_json)
+                     arg_key_value, arg_number, print_json)
 
 __all__ = ["register", "add_fragility_command", "cmd_fragility"]
 
@@ -55,6 +55,11 @@ def add_fragility_command(sub) -> None:
     p.add_argument("--tail", type=float, default=None, metavar="S",
                    help="end each run S seconds after the record's strong motion (95 %% of "
                         "its Arias intensity); default: the whole record + 10 s")
+    p.add_argument("--vertical", type=arg_number, default=None, metavar="RATIO",
+                   help="every record without a vertical channel of its own (a records.csv "
+                        "column vertical names one) also moves the ground vertically: a_v = "
+                        "RATIO x its horizontal acceleration, in phase, 0 to 3 (default: only "
+                        "the recorded channels)")
     p.add_argument("--no-numerical", dest="numerical", action="store_false",
                    help="do not measure the engines' own error on the scene (beta_num; "
                         "measured by default on the scene's pulses at the settings used)")
@@ -81,14 +86,16 @@ def summary(frag) -> dict[str, Any]:
     """The JSON the command prints: the ensemble, per backend ``median``, ``dispersion``, their
     intervals, ``dispersion_numerical`` and ``dispersion_total``, the most efficient measure,
     and (engines) the test's ``statistic`` and ``p_value`` and the verdict; ``measures``: the
-    intensity-measure table; ``numerical``: how each engine's beta_num was measured."""
+    intensity-measure table; ``numerical``: how each engine's beta_num was measured;
+    ``vertical`` (only when the runs carry vertical motion): which
+    (:func:`rockbench.studies.fragility.describe_vertical`)."""
     a = frag.analysis
     keep = ("median", "median_ci", "dispersion", "dispersion_ci", "dispersion_numerical",
             "dispersion_total", "im_best", "im_same_best", "runs", "not_ok", "outside_model",
             "overturned", "records", "note", "n_valid_resamples", "cpu_s", "statistic",
             "p_value", "median_difference", "median_difference_ci", "indistinguishable",
             "verdict", "tests")
-    return {"scene": frag.scene, "intensity": a["intensity"], "reference": a["reference"],
+    out = {"scene": frag.scene, "intensity": a["intensity"], "reference": a["reference"],
             "ensemble": {k: v for k, v in a.get("ensemble", {}).items() if k != "text"},
             "records": len(frag.records), "scales": frag.scales,
             "engine_scales": frag.info.get("engine_scales"), "tail": a.get("tail"),
@@ -98,6 +105,9 @@ def summary(frag) -> dict[str, Any]:
                          for b, v in a["backends"].items()},
             "measures": a.get("measures"), "numerical": a.get("numerical", {}),
             "validity": a.get("validity")}
+    if a.get("vertical"):                  # absent without vertical motion (keys unchanged)
+        out["vertical"] = a["vertical"]
+    return out
 
 
 def _interval(ci) -> str:
@@ -115,6 +125,10 @@ def cmd_fragility(args: argparse.Namespace) -> int:
 
     load_scene_from(args)                      # a bad scene or --set fails now
     check_bootstrap(args.boot, args.seed, names=("--boot", "--seed"))
+    if args.vertical is not None:
+        from ..limits import check_in_limit
+
+        check_in_limit("vertical_ratio", "--vertical", args.vertical)
     engines = engine_names(args)
     selected = [e for e in (engines or resolve_engines(None)) if e != REFERENCE]
     settings = engine_settings(list(args.settings), selected, dt=args.dt, also=(REFERENCE,))
@@ -127,7 +141,8 @@ def cmd_fragility(args: argparse.Namespace) -> int:
                          workers=args.workers, scheduler=args.scheduler,
                          progress=not (args.quiet or args.json), n_boot=args.boot,
                          seed=args.seed, tail=args.tail,
-                         numerical="measure" if args.numerical else None)
+                         numerical="measure" if args.numerical else None,
+                         vertical=args.vertical)
     out = summary(frag)
     if args.export:
         from ..errors import ParameterError
@@ -159,6 +174,8 @@ def cmd_fragility(args: argparse.Namespace) -> int:
         if "verdict" in v:
             print(v["verdict"])
     print(f"ensemble: {frag.analysis['ensemble']['text']}")
+    if out.get("vertical"):
+        print(out["vertical"]["text"])
     if (out.get("validity") or {}).get("text"):
         print(out["validity"]["text"])
     print("dispersion: record-to-record beta_RR, the engine's own beta_num (its error on the "

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from .common import (add_quiet_option, add_setting_option, arg_count, arg_key_value,
-                     backend_overrides, print_json)
+                     arg_number, backend_overrides, print_json)
 from ..errors import ParameterError
 
 __all__ = ["add_map_command", "cmd_map"]
@@ -34,6 +34,10 @@ def add_map_command(sub) -> None:
     p.add_argument("--pulses", default="all", metavar="P",
                    help="all, or a comma-separated subset of symmetric+, symmetric-, "
                         "antisymmetric+, antisymmetric-")
+    p.add_argument("--vertical", type=arg_number, default=0.0, metavar="RATIO",
+                   help="every pulse also moves the ground vertically: a_v = RATIO x u_g'' "
+                        "(same shape, sign and period, in phase; positive up), 0 to 3 "
+                        "(default 0: horizontal only)")
 
     add_setting_option(p, "set")       # the one grammar; analytic: method=compiled|solve_ivp
     add_quiet_option(p)
@@ -92,7 +96,8 @@ def _save(fig, path: Path) -> None:
 def _with_near_boundary(df, store: Path):
     """``df`` (the first map of --compare) with its cells near the boundary marked
     (:func:`rockbench.studies.maps.mark_near_boundary`) when its store says it is an analytic map
-    (its scene and run length are in ``_inputs.json``); otherwise ``df`` unchanged."""
+    (its scene, run length and vertical ratio are in ``_inputs.json``); otherwise ``df``
+    unchanged."""
     import re
 
     from ..studies.map_agreement import mark_near_boundary
@@ -105,13 +110,15 @@ def _with_near_boundary(df, store: Path):
     m = re.search(r"\+ ([0-9.eE+-]+) s$", str(inputs.get("duration", "")))
     tail = float(m.group(1)) if m else None
     scene = Scene.from_dict(inputs["scene"], source=f"{store}/_inputs.json")
-    return mark_near_boundary(df, scene, tail=None if tail == 10.0 else tail)
+    return mark_near_boundary(df, scene, tail=None if tail == 10.0 else tail,
+                              vertical=float(inputs.get("vertical_ratio", 0.0)))
 
 
 #: Options of a map run that mean nothing with --compare (a comparison reads two stores).
 _RUN_OPTIONS = (("scene", None, "SCENE"), ("grid", "100x100", "--grid"),
                 ("amplitude", "0.5:8", "--amplitude"), ("frequency", "0.5:10", "--frequency"),
-                ("pulses", "all", "--pulses"), ("engine", "analytic", "--engine"),
+                ("pulses", "all", "--pulses"), ("vertical", 0.0, "--vertical"),
+                ("engine", "analytic", "--engine"),
                 ("store", None, "--store"), ("adaptive", False, "--adaptive"),
                 ("workers", None, "--workers"), ("scheduler", None, "--scheduler"))
 
@@ -249,7 +256,10 @@ def cmd_map(args: argparse.Namespace) -> int:
         return 0
     if not args.scene:
         raise ParameterError("SCENE", None, "a scene name or .toml path (or --compare A B)")
+    from ..studies.maps import check_vertical_ratio
     from .common import scene_overrides as _overrides
+
+    vertical = check_vertical_ratio(args.vertical, "--vertical")
 
     scene_overrides = _overrides(args.overrides) if args.overrides else None
     method, texts = None, []
@@ -260,34 +270,40 @@ def cmd_map(args: argparse.Namespace) -> int:
         else:
             texts.append(text)
     settings = backend_overrides(args.engine, argparse.Namespace(settings=texts, dt=None))
-    store = args.store or str(Path("maps") / f"{Path(args.scene).stem}_{args.engine}.parquet")
+    # the default store of a vertical map is its own (a horizontal one is not refused)
+    suffix = f"_vertical{vertical:g}" if vertical else ""
+    store = args.store or str(Path("maps") /
+                              f"{Path(args.scene).stem}_{args.engine}{suffix}.parquet")
     if not args.store:
         _set_aside_other_code(Path(store), quiet=args.quiet)
     df = run_map(args.scene, args.engine, grid=args.grid, amplitude=args.amplitude,
                  frequency=args.frequency, pulses=args.pulses, overrides=scene_overrides,
                  settings=settings, method=method, store=store, workers=args.workers,
-                 scheduler=args.scheduler, progress=not args.quiet, adaptive=args.adaptive)
-    summary = {"scene": args.scene, "engine": args.engine, "cells": len(df),
-               "cells_run": int(df.attrs.get("cells_run", 0)),
+                 scheduler=args.scheduler, progress=not args.quiet, adaptive=args.adaptive,
+                 vertical=vertical)
+    summary = {"scene": args.scene, "engine": args.engine, "vertical_ratio": vertical,
+               "cells": len(df), "cells_run": int(df.attrs.get("cells_run", 0)),
                "reused": int(df.attrs.get("reused", 0)), "store": store,
                "overturned": int(df["overturned"].fillna(False).astype(bool).sum()),
-               "not_ok": int((df["status"] != "ok").sum()), "method": df.attrs.get("method")}
+               "not_ok": int((df["status"] != "ok").sum()),
+               "outside": int(df["outside"].sum()), "method": df.attrs.get("method")}
     if args.adaptive:
         summary["inferred"] = int(df.attrs.get("inferred", 0))
+    name = df.attrs.get("scene", args.scene)          # the scene's own name, not its file
+    what = f"{name}, {args.engine}" + (f", a_v = {vertical:g} a_g" if vertical else "")
     if figure is not None:
         from ..report.map_figures import plot_map_panels
 
-        _save(plot_map_panels(df, title=f"{df.attrs.get('scene', args.scene)}, {args.engine}"),
-              figure)
+        _save(plot_map_panels(df, title=what), figure)
         summary["figure"] = str(figure)
     if args.json:
         print_json(summary)
         return 0
     how = (f", {summary['cells_run']} simulated now, {summary['inferred']} inferred"
            if args.adaptive else "")
-    name = df.attrs.get("scene", args.scene)          # the scene's own name, not its file
-    print(f"{name}, {args.engine}: {summary['cells']} cells ({summary['reused']} reused "
-          f"from {store}{how}), {summary['overturned']} overturn, {summary['not_ok']} not ok")
+    print(f"{what}: {summary['cells']} cells ({summary['reused']} reused "
+          f"from {store}{how}), {summary['overturned']} overturn, {summary['not_ok']} not ok, "
+          f"{summary['outside']} outside the analytic model")
     if figure is not None:
         print(f"figure: {figure}")
     return 0

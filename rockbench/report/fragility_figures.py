@@ -268,6 +268,8 @@ def fragility_html(section: Mapping[str, Any], figdir=None) -> str:
             "test compares these distributions (overturned runs ranked above every survivor).",
             name=f"fragility_peaks_{i}", png_dir=figdir))
         parts.append(H.html_table(fragility_table(a), graded=False, scroll=True))
+        if (a.get("vertical") or {}).get("text"):
+            parts.append(f"<p>{H.fmt(a['vertical']['text'])}</p>")
         if (a.get("validity") or {}).get("text"):
             parts.append(f"<p>{H.fmt(a['validity']['text'])}</p>")
         parts.append(f"<p>{H.fmt(_numerical_sentence(a))}</p>")

@@ -66,6 +66,23 @@ def _draw_analytic(ax, df: pd.DataFrame, shape: str, sign: int, inferred: bool):
     return mesh
 
 
+def _hatch_outside(ax, df: pd.DataFrame, shape: str, sign: int) -> bool:
+    """Hatch the rows of A whose cells lie outside the analytic model (column ``outside``: it
+    depends on the pulse, sign and A only); whether any was hatched."""
+    if "outside" not in df:
+        return False
+    g = df[(df["pulse"] == shape) & (df["sign"] == sign)]
+    rows = g.groupby("amplitude")["outside"].any().sort_index()
+    if not rows.any():
+        return False
+    A = rows.index.to_numpy(float)
+    e = _edges(A)
+    for i in np.flatnonzero(rows.to_numpy()):
+        ax.axhspan(e[i], e[i + 1], facecolor="none", edgecolor="#444444", hatch="//",
+                   linewidth=0.0)
+    return True
+
+
 def _is_inferred(df: pd.DataFrame) -> bool:
     return "inferred" in df and bool(df["inferred"].fillna(False).astype(bool).any())
 
@@ -75,21 +92,26 @@ def plot_map_panels(df: pd.DataFrame, *, title: str) -> Figure:
     survives, max |phi| / alpha (blue shades, colour bar), on W = omega_g / p (x) and
     A = a_g / (g tan alpha) (y). Cells an adaptive map inferred instead of simulating
     (``inferred`` column) carry a verdict but no max |phi|: they are grey (survives) or red,
-    never white, which would read as a structure at rest."""
+    never white, which would read as a structure at rest. Cells outside the analytic model
+    (``outside`` column: the base slides or the ground lifts the structure off) are hatched."""
     fig = Figure(figsize=(11, 8.5))
     axes = fig.subplots(2, 2, sharex=True, sharey=True)
     mesh = None
     inferred = _is_inferred(df)
+    hatched = False
     for ax, (shape, sign, label) in zip(axes.ravel(), PANELS):
         ax.set_title(label, fontsize=10)
         mesh = _draw_analytic(ax, df, shape, sign, inferred) or mesh
+        hatched = _hatch_outside(ax, df, shape, sign) or hatched
     for ax in axes[1]:
         ax.set_xlabel("W = omega_g / p [-]")
     for ax in axes[:, 0]:
         ax.set_ylabel("A = a_g / (g tan alpha) [-]")
     fig.suptitle(title + "\nred: overturns; blue: max |phi| / alpha of a surviving "
                  "structure" + ("; grey: survives, inferred by the adaptive map, not simulated"
-                                if inferred else ""), fontsize=11)
+                                if inferred else "")
+                 + ("\nhatched: outside the analytic model (its base slides or the ground lifts "
+                    "it off)" if hatched else ""), fontsize=11)
     fig.tight_layout()
     if mesh is not None:
         fig.colorbar(mesh, ax=list(axes.ravel()), shrink=0.6, pad=0.02,

@@ -6,7 +6,8 @@ Conventions (``docs/conventions.md``): SI units, seconds, m/s^2. The ground acce
 vertical motion) or another :class:`GroundMotion` on the same clock whose acceleration
 ``a_v(t)`` [m/s^2] is vertical, positive up (+y): a pulse's vertical part is the same wavelet
 times ``vertical_ratio`` (in phase), a record's is a second channel sampled at the horizontal
-channel's times (:meth:`Record.with_vertical`). A run starts from rest at
+channel's times (:meth:`Record.with_vertical`), and any two motions pair as
+:class:`WithVertical` (horizontal, vertical). A run starts from rest at
 :attr:`GroundMotion.t_start`; after :attr:`GroundMotion.t_end` the excitation is zero (records) or
 below 1e-12 of its peak (pulses), so a solver may treat the motion as free rocking from there on.
 
@@ -40,11 +41,13 @@ from ..limits import check_in_limit
 from .motion_base import GroundMotion, _check_factor, _check_interval, _times
 from .recorded import Record
 from .units import UNIT_FACTORS, UNIT_SPELLINGS, parse_units, unit_factor
+from .with_vertical import WithVertical
 
 __all__ = [
     "GroundMotion",
     "RickerPulse",
     "Record",
+    "WithVertical",
     "UNIT_FACTORS",
     "UNIT_SPELLINGS",
     "parse_units",
@@ -387,7 +390,8 @@ def motion_from_spec(spec: dict[str, Any] | None, structure: Any = None) -> Grou
     :func:`rockbench.scene.records.load_record` (``dt`` and ``units`` may be omitted for an
     AT2 file); ``"vertical_path"`` (with ``"vertical_dt"`` [s] and ``"vertical_units"`` for a
     headerless file) adds the vertical channel (:func:`rockbench.scene.records.load_record`'s
-    ``vertical``), scaled by the same ``scale``.
+    ``vertical``), scaled by the same ``scale``; or ``"vertical_ratio"`` r [-] the channel r
+    times the (scaled) horizontal one (:meth:`Record.with_vertical_ratio`; not both).
     """
     if spec is None:
         return None
@@ -413,8 +417,13 @@ def motion_from_spec(spec: dict[str, Any] | None, structure: Any = None) -> Grou
         vpath = spec.get("vertical_path")
         if vpath is not None and not isinstance(vpath, (str, os.PathLike)):
             raise ParameterError("motion.vertical_path", vpath, "the path of a record file")
-        return load_record(spec["path"], dt=spec.get("dt"), units=spec.get("units"),
-                           scale=spec.get("scale", 1.0), vertical=vpath,
-                           vertical_dt=spec.get("vertical_dt"),
-                           vertical_units=spec.get("vertical_units"))
+        vr = spec.get("vertical_ratio", 0.0)
+        if vpath is not None and vr:
+            raise ParameterError("motion.vertical_ratio", vr, "left out with vertical_path (a "
+                                 "record has one vertical channel)")
+        rec = load_record(spec["path"], dt=spec.get("dt"), units=spec.get("units"),
+                          scale=spec.get("scale", 1.0), vertical=vpath,
+                          vertical_dt=spec.get("vertical_dt"),
+                          vertical_units=spec.get("vertical_units"))
+        return rec.with_vertical_ratio(vr) if vr else rec
     raise ParameterError("motion.kind", kind, "one of ricker, record, none")

@@ -119,6 +119,24 @@ class Record(GroundMotion):
             new._attach_vertical(vertical)
         return new
 
+    def with_vertical_ratio(self, ratio: float) -> Record:
+        """This record with the vertical channel ``ratio`` times its own samples: a_v = r u_g''
+        at every sample, in phase (as a Ricker pulse's ``vertical_ratio``; r in [0, 3], limit
+        ``vertical_ratio``; 0: without a vertical channel). For a record without a recorded
+        vertical channel (it replaces one this record has)."""
+        from ..limits import check_in_limit
+
+        if isinstance(ratio, (bool, np.bool_)):
+            raise ParameterError("vertical_ratio", ratio, "a finite number in [0, 3]")
+        r = check_in_limit("vertical_ratio", "vertical_ratio", ratio)
+        if r == 0.0:
+            return self.with_vertical(None)
+        v = Record(self._time, r * self._acc, name=f"{r:g} x {self.name}", source=self.source,
+                   units_in=self.units_in)
+        v._scale = self._scale * r
+        v._nominal_dt = self._nominal_dt
+        return self.with_vertical(v)
+
     @classmethod
     def from_samples(cls, acc: Any, dt: float, t0: float = 0.0, units: str = "m/s2",
                      name: str = "", source: str = "") -> Record:

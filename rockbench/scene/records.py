@@ -214,8 +214,11 @@ def _units_of(text: Any, where: str) -> str:
 
 
 def _read_listing(csv_path: Path) -> dict[str, dict[str, Any]]:
-    """``records.csv`` as {file stem: {"dt": s, "units": ...}}; RecordError if unreadable or
-    without a dt column (``dt_s`` or ``dt``)."""
+    """``records.csv`` as {file stem: {"dt": s or None, "units": ..., "vertical": stem or
+    None}}; RecordError if unreadable, or with a dt that is not a number. A row's dt may be
+    empty (an AT2 file's header gives its own; a headerless file needs one:
+    :func:`find_records` says so); ``vertical`` (optional column) names the file stem of the
+    record's vertical channel in the same folder (its file name or stem)."""
     try:
         size = csv_path.stat().st_size
         _, max_bytes = limit("record_bytes")
@@ -232,37 +235,82 @@ def _read_listing(csv_path: Path) -> dict[str, dict[str, Any]]:
     name_col = cols.get("record") or cols.get("name") or next(iter(rows[0]))
     dt_col = cols.get("dt_s") or cols.get("dt")
     unit_col = cols.get("units") or cols.get("unit")
-    if dt_col is None:
+    vert_col = cols.get("vertical")
+    if dt_col is None and vert_col is None:
         raise RecordError(f"{csv_path}: no dt column (dt_s or dt)")
     out = {}
     for r in rows:
+        text = str(r.get(dt_col) or "").strip() if dt_col is not None else ""
         try:
-            dt = float(r[dt_col])
-        except (TypeError, ValueError):
+            dt = float(text) if text else None
+        except ValueError:
             raise RecordError(f"{csv_path}: record {r.get(name_col)!r} has dt "
                               f"{r.get(dt_col)!r}, not a number") from None
-        out[str(r[name_col]).strip()] = {
-            "dt": dt, "units": _units_of(r[unit_col], f"{csv_path}: record "
-                                             f"{r.get(name_col)!r}") if unit_col else "cm/s2"}
+        entry = {"dt": dt, "units": _units_of(r[unit_col], f"{csv_path}: record "
+                                              f"{r.get(name_col)!r}") if unit_col else "cm/s2"}
+        vert = str(r.get(vert_col) or "").strip() if vert_col is not None else ""
+        if vert:
+            entry["vertical"] = vert
+        out[str(r[name_col]).strip()] = entry
     return out
 
 
 def listed_metadata(path: str | os.PathLike) -> dict[str, Any] | None:
     """dt [s] and units of a headerless record file from the ``records.csv`` beside it
     (columns ``record`` = file stem, ``dt_s`` or ``dt``, ``units``), or None if it is not
-    listed there."""
+    listed there; a listed vertical channel (column ``vertical``) adds ``vertical`` (its path),
+    ``vertical_dt`` and ``vertical_units`` (:func:`find_records`)."""
     p = _check_path(path)
     listing = p.parent / "records.csv"
     if not listing.is_file():
         return None
-    return _read_listing(listing).get(p.stem)
+    table = _read_listing(listing)
+    entry = table.get(p.stem)
+    if entry is None:
+        return None
+    out = {"dt": entry["dt"], "units": entry["units"]}
+    if entry.get("vertical"):
+        out.update(_vertical_of(listing, table, p.stem, entry))
+    return out
+
+
+def _vertical_of(listing: Path, table: dict[str, dict[str, Any]], name: str,
+                 entry: dict[str, Any]) -> dict[str, Any]:
+    """``vertical`` (the resolved path), ``vertical_dt`` [s] and ``vertical_units`` of the
+    vertical channel that ``listing`` names for record ``name`` (a file stem beside it): an AT2
+    file's header gives its own; a headerless one takes its own line of the listing, else the
+    record's (two components of one station share the time base). RecordError when the file
+    is not there, is ambiguous, or is the record itself."""
+    stem = entry["vertical"]
+    found = [q for q in listing.parent.iterdir() if q.is_file() and stem in (q.name, q.stem)
+             and q.suffix.lower() not in (".md", ".csv")]
+    if stem == name or any(q.stem == name for q in found):
+        raise RecordError(f"{listing}: record {name!r} names itself as its vertical channel")
+    if len(found) != 1:
+        raise RecordError(f"{listing}: record {name!r} names the vertical channel {stem!r}, "
+                          f"but there is {'no file' if not found else 'more than one file'} "
+                          f"{stem}.* beside it")
+    v = found[0]
+    if v.suffix.lower() == ".at2":
+        return {"vertical": str(v.resolve()), "vertical_dt": None, "vertical_units": None}
+    own = table.get(v.stem, {})
+    dt = own.get("dt") if own.get("dt") is not None else entry["dt"]
+    if dt is None:
+        raise RecordError(f"{listing}: the vertical channel {v.name!r} of record {name!r} is a "
+                          f"headerless file without a dt (give it, or the record, a dt)")
+    return {"vertical": str(v.resolve()), "vertical_dt": dt,
+            "vertical_units": own.get("units", entry["units"]) if own else entry["units"]}
 
 
 def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], list[str]]:
     """Record files under ``records_dir`` (searched recursively), sorted by name: PEER
     ``.AT2`` files (dt and units from their header) and headerless files listed in a
     ``records.csv`` next to them (columns: ``record`` = file stem, ``dt_s`` or ``dt`` [s], and
-    ``units``: "cm/s^2..." / "m/s^2..." / "g"; cm/s^2 when absent).
+    ``units``: "cm/s^2..." / "m/s^2..." / "g"; cm/s^2 when absent; an AT2 file may be listed
+    with an empty dt). A column ``vertical`` names, per record, the file (name or stem) of its
+    vertical channel beside it (acceleration positive up, in its own file's units): the record then
+    carries ``vertical`` (the path), ``vertical_dt`` and ``vertical_units``
+    (:func:`listed_metadata`), and that file is a channel, not a record of its own.
 
     Returns (records, notes): each record a dict name, path (resolved), dt [s] or None, units
     or None; notes say which other files were skipped and why. A record is identified by its
@@ -279,6 +327,7 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
                                                               "in a records.csv)")
     records, notes = [], []
     tables: dict[Path, dict[str, dict[str, Any]]] = {}
+    verticals: dict[Path, dict[str, dict[str, Any]]] = {}      # folder -> record -> channel
     for listing in sorted(root.rglob("records.csv")):
         tables[listing.parent] = table = _read_listing(listing)      # RecordError: stop here
         stems = {q.stem for q in listing.parent.iterdir() if q.is_file()}
@@ -286,20 +335,30 @@ def find_records(records_dir: str | os.PathLike) -> tuple[list[dict[str, Any]], 
             if name not in stems:
                 raise RecordError(f"{listing}: lists record {name!r}, but there is no file "
                                   f"{name}.* beside it (remove the line or add the file)")
+        verticals[listing.parent] = {name: _vertical_of(listing, table, name, e)
+                                     for name, e in table.items() if e.get("vertical")}
+    channels = {(folder, Path(v["vertical"]).stem) for folder, vs in verticals.items()
+                for v in vs.values()}
     for p in sorted(root.rglob("*"), key=lambda q: (q.stem.lower(), str(q))):
         if not p.is_file() or p.name == "records.csv" or p.suffix.lower() in (".md", ".csv"):
             continue
+        if (p.parent, p.stem) in channels:        # a record's vertical channel, not a record
+            continue
+        vert = verticals.get(p.parent, {}).get(p.stem, {})
         if p.suffix.lower() == ".at2":
             records.append({"name": p.stem, "path": str(p.resolve()), "dt": None,
-                            "units": None, "_rel": p.relative_to(root)})
+                            "units": None, **vert, "_rel": p.relative_to(root)})
             continue
         entry = tables.get(p.parent, {}).get(p.stem)
         if entry is None:
             notes.append(f"{p.name}: skipped (not an .AT2 file and not listed in a "
                          f"records.csv with its dt)")
             continue
+        if entry["dt"] is None:
+            raise RecordError(f"{p.parent / 'records.csv'}: lists the headerless file "
+                              f"{p.name} without a dt")
         records.append({"name": p.stem, "path": str(p.resolve()), "dt": entry["dt"],
-                        "units": entry["units"], "_rel": p.relative_to(root)})
+                        "units": entry["units"], **vert, "_rel": p.relative_to(root)})
     stems: dict[str, int] = {}
     for r in records:
         stems[r["name"]] = stems.get(r["name"], 0) + 1

@@ -162,8 +162,10 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike], *,
     them), bundled ensemble names (:func:`bundled_ensembles`), the synthetic ensemble's name
     (:func:`parse_synthetic`; its records are written under ``cache``,
     :func:`synthetic_folder`), or records this function returned. Each record a dict name,
-    path, dt [s] or None, units or None, and ``ensemble`` (what :func:`describe_ensemble`
-    reads: ``{"kind": "synthetic", ...}``, ``{"kind": "bundled", ...}`` or
+    path, dt [s] or None, units or None, with ``vertical`` (the path of its vertical channel),
+    ``vertical_dt`` and ``vertical_units`` when a ``records.csv`` lists one
+    (:func:`rockbench.scene.records.find_records`), and ``ensemble`` (what
+    :func:`describe_ensemble` reads: ``{"kind": "synthetic", ...}``, ``{"kind": "bundled", ...}`` or
     ``{"kind": "real", "folder": ...}``); ParameterError when a source is none of these or no
     record is found. A record is identified by its resolved
     path: the same file given twice is kept once, and two files that share a name (``LA21`` in
@@ -193,7 +195,9 @@ def resolve_records(sources: str | os.PathLike | Sequence[str | os.PathLike], *,
                                      "; ".join(notes[:3]) or "it holds no file")
         elif p.is_file():
             if p.suffix.lower() == ".at2":
-                recs = [{"name": p.stem, "path": str(p.resolve()), "dt": None, "units": None}]
+                meta = listed_metadata(p) or {}        # a vertical channel it may list
+                recs = [{"name": p.stem, "path": str(p.resolve()), "dt": None, "units": None,
+                         **{k: v for k, v in meta.items() if k.startswith("vertical")}}]
             else:
                 meta = listed_metadata(p)
                 if meta is None:

@@ -35,8 +35,9 @@ from .ensembles import describe_ensemble, record_ims, resolve_records
 from .fragility_stats import N_BOOT, analyse, check_bootstrap, numerical_dispersion, stripes
 from .intensity import MEASURES, Structure
 
-__all__ = ["RUN_COLUMNS", "RUN_GRID", "parse_scales", "run_lengths", "fragility_cases",
-           "numerical_evidence", "numerical_terms", "run_fragility", "Fragility"]
+__all__ = ["RUN_COLUMNS", "RUN_GRID", "parse_scales", "run_lengths", "vertical_spec",
+           "fragility_cases", "describe_vertical", "numerical_evidence", "numerical_terms",
+           "run_fragility", "Fragility"]
 
 #: Run lengths cut after the strong motion (``tail``) are rounded up to a multiple of this [s],
 #: so that the runs of records of about the same length share one length (a batched engine,
@@ -53,7 +54,8 @@ RUN_COLUMNS: dict[str, str] = {
     "peak": "-, max |phi| / alpha, alpha of the taller column (overturned: where it stopped)",
     "overturned": "-, the frame overturned",
     "status": "-, ok | diverged | invalid | error",
-    "outside": "-, the scaled record's PGA exceeds mu g: outside the analytic model (a base at "
+    "outside": "-, the scaled record's PGA exceeds mu g (with vertical motion: |a_g| > mu "
+               "(g + a_v) or g + a_v <= 0 at some time): outside the analytic model (a base at "
                "rest slides, rockbench.validity)",
     "cpu_s": "s, CPU time of the integration or stepping",
 }
@@ -106,16 +108,32 @@ def run_lengths(ims: pd.DataFrame, tail: float | None) -> dict[str, float | None
     return out
 
 
+def vertical_spec(record: Mapping[str, Any], ratio: float = 0.0) -> dict[str, Any]:
+    """The vertical part of a record's motion spec (:func:`rockbench.scene.motion.
+    motion_from_spec`): its own vertical channel (``record["vertical"]``, a ``records.csv``'s
+    column: ``vertical_path``, with ``vertical_dt`` and ``vertical_units`` for a headerless
+    file); else, with ``ratio`` r > 0, r times its horizontal channel (``vertical_ratio``);
+    else nothing (the spec of a horizontal record, key for key)."""
+    if record.get("vertical"):
+        out: dict[str, Any] = {"vertical_path": str(record["vertical"])}
+        if record.get("vertical_dt") is not None:
+            out.update(vertical_dt=float(record["vertical_dt"]),
+                       vertical_units=record["vertical_units"])
+        return out
+    return {"vertical_ratio": float(ratio)} if ratio else {}
+
+
 def fragility_cases(scene: str, records: Sequence[Mapping[str, Any]], engines: Sequence[str],
                     scales: Sequence[float], *, settings: Mapping[str, Mapping] | None = None,
                     overrides: Mapping[str, Any] | None = None,
-                    durations: Mapping[str, float | None] | None = None
-                    ) -> list[dict[str, Any]]:
+                    durations: Mapping[str, float | None] | None = None,
+                    vertical: float = 0.0) -> list[dict[str, Any]]:
     """Sweep cases (:mod:`rockbench.sweep.cases`): every engine x record x polarity (+1, -1) x
     scale, each run from rest for ``durations[path]`` [s] (:func:`run_lengths`; missing or None:
     the record + 10 s, the package default). ``settings`` maps a backend to its setting
     overrides; the analytic model runs on its compiled path (``method="compiled"``) unless told
-    otherwise."""
+    otherwise. Every run of a record carries its vertical part (:func:`vertical_spec`: its own
+    channel, or ``vertical`` r times its horizontal one), scaled and reversed with it."""
     settings = {k: dict(v) for k, v in (settings or {}).items()}
     settings.setdefault("analytic", {}).setdefault("method", "compiled")
     cases = []
@@ -126,6 +144,7 @@ def fragility_cases(scene: str, records: Sequence[Mapping[str, Any]], engines: S
                     m = {"kind": "record", "path": r["path"], "scale": float(pol * s)}
                     if r.get("dt") is not None:
                         m.update(dt=float(r["dt"]), units=r["units"])
+                    m.update(vertical_spec(r, vertical))
                     cases.append({"scene": scene, "overrides": dict(overrides or {}),
                                   "engine": e, "settings": settings.get(e, {}), "motion": m,
                                   "duration": (durations or {}).get(r["path"])})
@@ -177,21 +196,82 @@ def numerical_terms(evidence: pd.DataFrame) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _validity(runs: pd.DataFrame, limit: float, mu: float) -> dict[str, Any]:
-    """How many runs lie outside the analytic model (PGA above mu g), per backend, with a
-    sentence: such runs are physics of another kind (the base slides), counted in the fits and
-    tests like the others (leaving them out would cut the ladder where the frame overturns)."""
+def _validity(runs: pd.DataFrame, limit: float, mu: float,
+              vertical: bool = False) -> dict[str, Any]:
+    """How many runs lie outside the analytic model (PGA above mu g; with vertical motion:
+    |a_g| > mu (g + a_v), or g + a_v <= 0, at some time), per backend, with a sentence: such
+    runs are physics of another kind (the base slides, the ground throws the structure),
+    counted in the fits and tests like the others (leaving them out would cut the ladder
+    where the frame overturns)."""
     per = {str(b): {"outside": int(g["outside"].sum()), "runs": int(len(g))}
            for b, g in runs.groupby("backend", sort=False)}
     n_out = sum(v["outside"] for v in per.values())
+    why = (f"have a ground motion that asks the base for more than mu (g + a_v) (friction "
+           f"mu = {mu:g}) or falls faster than gravity (g + a_v <= 0) at some time, where a "
+           "base at rest slides or the structure leaves the ground" if vertical else
+           f"have a PGA above mu g = {limit:.3g} m/s^2 (friction mu = {mu:g}), where a base at "
+           "rest slides")
     text = "" if n_out == 0 else (
         "Outside the analytic model: " + ", ".join(
             f"{b} {v['outside']} of {v['runs']} runs" for b, v in per.items())
-        + f" have a PGA above mu g = {limit:.3g} m/s^2 (friction mu = {mu:g}), where a base at "
-          "rest slides (rockbench.validity); they are counted in the fits and tests like the "
+        + f" {why} (rockbench.validity); they are counted in the fits and tests like the "
           "others, and an engine's run that slid beyond its max_sliding is not ok and left out.")
     return {"pga_limit": limit, "friction": mu, "backends": per, "outside": n_out,
             "text": text}
+
+
+def describe_vertical(records: Sequence[Mapping[str, Any]],
+                      ratio: float = 0.0) -> dict[str, Any] | None:
+    """Which vertical motion the runs of ``records`` carry (:func:`vertical_spec`), None when
+    none does: ``ratio`` r, ``recorded`` (the records with their own channel), ``scaled`` (those
+    given r times their horizontal one), ``horizontal`` (the others) and ``text``, one
+    sentence for the page and the command's output."""
+    recorded = [str(r["name"]) for r in records if r.get("vertical")]
+    rest = [str(r["name"]) for r in records if not r.get("vertical")]
+    scaled, horizontal = (rest, []) if ratio else ([], rest)
+    if not recorded and not scaled:
+        return None
+    n = len(records)
+    parts = []
+    if recorded:
+        parts.append(f"the recorded vertical channel of {len(recorded)} of {n} records "
+                     "(records.csv)" if len(recorded) < n else
+                     f"the recorded vertical channel of every record ({n}, records.csv)")
+    if scaled:
+        parts.append(f"a_v = {ratio:g} u_g'' (in phase, {ratio:g} x the horizontal "
+                     f"acceleration) for {'the other ' if recorded else 'every record, '}"
+                     f"{len(scaled)}")
+    text = ("Vertical ground motion in every run (scaled and reversed with its record): "
+            + "; ".join(parts)
+            + (f"; the other {len(horizontal)} run horizontal only" if horizontal else "")
+            + ". The intensity measures are the horizontal channel's.")
+    return {"ratio": float(ratio), "recorded": recorded, "scaled": scaled,
+            "horizontal": horizontal, "text": text}
+
+
+def _outside_with_vertical(runs: pd.DataFrame, records: Sequence[Mapping[str, Any]],
+                           scene: Any, ratio: float) -> np.ndarray:
+    """The runs frame's ``outside`` by the one rule (:func:`rockbench.validity.motion_validity`)
+    on each run's motion with its vertical part: per record and signed scale, once."""
+    from ..scene.motion import motion_from_spec
+    from ..validity import motion_validity
+
+    by_name = {str(r["name"]): r for r in records}
+    motions: dict[str, Any] = {}
+    known: dict[tuple[str, float], bool] = {}
+    out = np.zeros(len(runs), dtype=bool)
+    for i, (name, pol, s) in enumerate(zip(runs["record"], runs["polarity"], runs["scale"])):
+        k = (str(name), float(pol) * float(s))
+        if k not in known:
+            if k[0] not in motions:
+                r = by_name[k[0]]
+                spec = {"kind": "record", "path": r["path"], **vertical_spec(r, ratio)}
+                if r.get("dt") is not None:
+                    spec.update(dt=float(r["dt"]), units=r["units"])
+                motions[k[0]] = motion_from_spec(spec)
+            known[k] = not motion_validity(scene, motions[k[0]], scale=k[1]).inside
+        out[i] = known[k]
+    return out
 
 
 @dataclass
@@ -202,7 +282,8 @@ class Fragility:
     and the ``store`` used; ``info``: engines, engine_scales, engine_records, executor,
     ``ensemble`` (:func:`rockbench.studies.ensembles.describe_ensemble`), ``tail`` [s] or None,
     ``structure`` (alpha [rad], p [rad/s], period of Sa [s]), ``numerical`` (per engine:
-    :func:`numerical_terms`)."""
+    :func:`numerical_terms`) and, with vertical motion, ``vertical``
+    (:func:`describe_vertical`)."""
 
     scene: str
     runs: pd.DataFrame
@@ -247,7 +328,8 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
                   workers: int | None = None, scheduler: str | None = None,
                   progress: bool = True, n_boot: int = N_BOOT, seed: int = 0,
                   keyed_by_code: bool = True, retry_errors: bool = False,
-                  tail: float | None = None, numerical: Any = "measure") -> Fragility:
+                  tail: float | None = None, numerical: Any = "measure",
+                  vertical: float | None = None) -> Fragility:
     """Run and analyse the fragility of ``scene`` (a built-in name or a .toml path) over
     ``records`` (:func:`resolve_records`: folders, files, ``bundled``, ``synthetic``) at the
     ladder ``scales`` (:func:`parse_scales`), both polarities, for the analytic model and
@@ -267,6 +349,12 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     folder), and a rerun runs only the missing cases (and, with ``retry_errors``, those
     stored with status "error"). ``executor``: "process" (default; ``workers`` processes),
     "serial", or "dask" (implied by ``scheduler``, a running scheduler's address).
+    Vertical ground motion: a record a ``records.csv`` lists with a vertical channel (column
+    ``vertical``) carries it in every run; ``vertical`` r in [0, 3] (limit ``vertical_ratio``;
+    None or 0: none) gives every other record the vertical part a_v = r u_g'' (in phase);
+    ``analysis["vertical"]`` (:func:`describe_vertical`) says which, and ``outside`` then
+    follows the one rule with the vertical part (:func:`rockbench.validity.motion_validity`).
+    Without either the cases are those of a horizontal ensemble, key for key.
     """
     from ..runner import REFERENCE, resolve_engines
     from ..scene.scene import load_scene
@@ -278,6 +366,13 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     if not (numerical is None or numerical == "measure" or isinstance(numerical, Mapping)):
         raise ParameterError("numerical", numerical, "'measure', None or engine -> beta_num")
     check_bootstrap(n_boot, seed)                 # every bound before any run
+    ratio = 0.0
+    if vertical is not None:
+        from ..limits import check_in_limit
+
+        if isinstance(vertical, bool):
+            raise ParameterError("vertical", vertical, "a number in [0, 3] or None")
+        ratio = check_in_limit("vertical_ratio", "vertical", vertical)
     run_lengths(pd.DataFrame({"path": [], "t95": [], "duration": []}), tail)
     ladder = parse_scales(scales)
     names = resolve_engines(engines, name="engine")
@@ -294,16 +389,19 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     ims = record_ims(recs, structure)
     durations = run_lengths(ims, tail)
     cases = fragility_cases(scene, recs, [REFERENCE], ladder, settings=settings,
-                            overrides=overrides, durations=durations)
+                            overrides=overrides, durations=durations, vertical=ratio)
     e_ladder = parse_scales(engine_scales) if engine_scales is not None else ladder
     e_recs = recs[:engine_records] if engine_records else recs
     if len(names) > 1:
         cases += fragility_cases(scene, e_recs, names[1:], e_ladder, settings=settings,
-                                 overrides=overrides, durations=durations)
+                                 overrides=overrides, durations=durations, vertical=ratio)
     executor = executor or ("dask" if scheduler else "process")
     rows = run_cases(cases, store=directory, executor=executor, workers=workers,
                      dask_address=scheduler, progress=progress, retry_errors=retry_errors)
     runs = _runs_frame(rows, ims, measure, pga_limit(sc))
+    vert = describe_vertical(recs, ratio)
+    if vert is not None:          # the one rule with the vertical part, not the PGA alone
+        runs["outside"] = _outside_with_vertical(runs, recs, sc, ratio)
     num_info: dict[str, Any] = {}
     if numerical == "measure" and len(names) > 1:
         num_info = numerical_terms(numerical_evidence(
@@ -334,11 +432,13 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
                              "sa_period": structure.period}
     analysis["tail"] = tail
     analysis["numerical"] = num_info
-    analysis["validity"] = _validity(runs, pga_limit(sc), friction_of(sc))
+    analysis["validity"] = _validity(runs, pga_limit(sc), friction_of(sc), vert is not None)
+    if vert is not None:                # absent without vertical motion (keys unchanged)
+        analysis["vertical"] = vert
     return Fragility(scene=str(scene), runs=runs, analysis=analysis, stripes=stripes(runs),
                      records=ims, scales=ladder.tolist(),
                      store=str(directory) if directory is not None else None,
                      info={"engines": names, "engine_scales": e_ladder.tolist(),
                            "engine_records": len(e_recs), "executor": executor,
                            "ensemble": ens, "tail": tail, "structure": analysis["structure"],
-                           "numerical": num_info})
+                           "numerical": num_info, **({"vertical": vert} if vert else {})})

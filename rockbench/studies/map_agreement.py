@@ -45,11 +45,12 @@ NEAR_BOUNDARY_MARGIN = 0.02
 
 def mark_near_boundary(ref: pd.DataFrame, scene: Any, *, margin: float = NEAR_BOUNDARY_MARGIN,
                        tail: float | None = None, overrides: dict | None = None,
-                       method: str | None = None) -> pd.DataFrame:
+                       method: str | None = None, vertical: float = 0.0) -> pd.DataFrame:
     """``ref`` (an analytic map of ``scene``) with a column ``near_boundary``: True where the
     reference verdict changes within ``margin`` (relative) of the cell's A, i.e. where the
     analytic model run at A (1 - margin) or A (1 + margin), same pulse and W, gives the other
-    verdict than at A (cells not ok: False). ``tail`` as the map's run length."""
+    verdict than at A (cells not ok: False). ``tail`` and ``vertical`` (the pulses' vertical
+    ratio) as the map's."""
     from ..errors import check_positive
 
     if not 0 < check_positive("margin", margin) < 1:
@@ -68,7 +69,7 @@ def mark_near_boundary(ref: pd.DataFrame, scene: Any, *, margin: float = NEAR_BO
     verdicts = []
     for f in (1.0 - margin, 1.0 + margin):
         cells = [(p, s, a * f, w) for p, s, a, w in base]
-        df = _analytic_chunk((sc.to_dict(), None, cells, method, tail))
+        df = _analytic_chunk((sc.to_dict(), None, cells, method, tail, float(vertical)))
         verdicts.append(df["overturned"].astype(bool).to_numpy())
     here = ok["overturned"].astype(bool).to_numpy()
     near = (verdicts[0] != here) | (verdicts[1] != here)

@@ -3,7 +3,9 @@ Parquet store.
 
 A map is one row per cell (:data:`MAP_COLUMNS`): the pulse (``pulse`` shape, ``sign``) at
 ``amplitude`` A = a_g / (g tan alpha) and ``frequency`` W = omega_g / p (alpha and p of the
-taller column), each run from rest for the pulse window (6 T_g) plus 10 s.
+taller column), each run from rest for the pulse window (6 T_g) plus 10 s; with a vertical
+ratio r every pulse also moves the ground vertically, a_v = r u_g'' (in phase). The column
+``outside`` marks the cells outside the analytic model (:func:`cell_outside`).
 
 * :func:`map_cells` - the grid (inclusive ranges, ``grid=(nA, nW)``, the pulses selected);
 * :func:`run_map` - run every cell with one backend: the analytic model through its compiled
@@ -31,12 +33,12 @@ import pandas as pd
 from ..constants import FALL_EXTENSION, FREE_TAIL
 from ..errors import ParameterError, RockbenchError
 from ..sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
-                              error_rows, load_map, map_rows, open_map_store, part_files,
-                              read_inputs, simulated_rows, store_error, store_inputs, tidy_map,
-                              write_part)
+                              error_rows, input_differences, load_map, map_rows, open_map_store,
+                              part_files, read_inputs, simulated_rows, store_error, store_inputs,
+                              tidy_map, write_part)
 
 __all__ = ["MAP_COLUMNS", "PULSES", "map_cells", "run_map", "load_map", "reuse_map",
-           "cell_duration"]
+           "cell_duration", "check_vertical_ratio", "cell_outside", "mark_outside"]
 
 #: The pulses of a map: name -> (shape, sign).
 PULSES: dict[str, tuple[str, int]] = {"symmetric+": ("symmetric", 1),
@@ -118,6 +120,49 @@ def _axes(grid: Any, amplitude: Any, frequency: Any) -> tuple[np.ndarray, np.nda
     return np.round(As, 12), np.round(Ws, 12)
 
 
+def check_vertical_ratio(vertical: Any, name: str = "vertical") -> float:
+    """A map's vertical ratio r [-] (a_v = r u_g'') as a float in [0, 3], the limit
+    ``vertical_ratio`` of every pulse (:mod:`rockbench.limits`, as ``rockbench run
+    --vertical``); ParameterError naming ``name`` otherwise."""
+    from ..limits import check_in_limit
+
+    if isinstance(vertical, (bool, np.bool_)) or vertical is None:
+        raise ParameterError(name, vertical, "a number in [0, 3]")
+    return check_in_limit("vertical_ratio", name, vertical)
+
+
+def cell_outside(scene, shape: str, sign: int, A: float, vertical: float = 0.0) -> bool:
+    """Whether the pulse of a map cell (``shape``, ``sign``, A, any W, vertical ratio
+    ``vertical``) lies outside the analytic model by the one rule,
+    :func:`rockbench.validity.motion_validity` with the scene's friction: its ground falls
+    faster than gravity at some time (g + a_v <= 0), or |a_g| > mu (g + a_v) at some time (a
+    base at rest slides; without vertical motion PGA > mu g). The test does not depend on W: a
+    pulse of another W has the same accelerations on a stretched clock (it is evaluated at
+    W = 1)."""
+    from ..scene.motion import RickerPulse
+    from ..validity import motion_validity
+
+    pulse = RickerPulse.dimensionless(A, 1.0, scene.structure, shape, int(sign),
+                                      vertical_ratio=vertical)
+    return not motion_validity(scene, pulse).inside
+
+
+def mark_outside(df: pd.DataFrame, scene, vertical: float = 0.0) -> pd.DataFrame:
+    """``df`` (a map) with the column ``outside`` (:func:`cell_outside`, computed once per
+    pulse, sign and A) and ``attrs`` ``vertical_ratio`` and ``outside`` (how many cells)."""
+    df = df.copy()
+    known: dict[tuple, bool] = {}
+    flags = []
+    for p, s, a in zip(df["pulse"], df["sign"], df["amplitude"]):
+        key = (str(p), int(s), float(a))
+        if key not in known:
+            known[key] = cell_outside(scene, *key, vertical)
+        flags.append(known[key])
+    df["outside"] = np.array(flags, dtype=bool)
+    df.attrs.update(vertical_ratio=float(vertical), outside=int(np.sum(flags)))
+    return df
+
+
 # ------------------------------------------------------------------------------------------
 # Running a map
 # ------------------------------------------------------------------------------------------
@@ -143,13 +188,19 @@ def _load_scene_ref(ref: Any, overrides: dict | None = None):
 
 
 def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
-                   extra: float = 0.0, parallel: bool = False) -> pd.DataFrame:
+                   extra: float = 0.0, parallel: bool = False,
+                   vertical: float = 0.0) -> pd.DataFrame:
     """Map rows of analytic ``cells`` in their order, each run for its map length plus
-    ``extra`` seconds (``parallel``: the compiled kernel's cells on numba's threads)."""
+    ``extra`` seconds (``parallel``: the compiled kernel's cells on numba's threads).
+
+    With a vertical part (``vertical`` = r > 0: a_v = r u_g'', in phase) the compiled path runs
+    each cell as one call of the run kernel on its pulse
+    (:func:`~rockbench.analytic.compiled.run_pulse_grid` ``vertical_ratio``: the grid kernel
+    builds horizontal pulses only); the reference path runs each as :func:`rockbench.run`."""
     if method == "compiled":
         from ..analytic.compiled import run_pulse_grid
         if tail is None and not extra:
-            df = run_pulse_grid(scene, cells, parallel=parallel)
+            df = run_pulse_grid(scene, cells, parallel=parallel, vertical_ratio=vertical)
         else:
             t = FREE_TAIL if tail is None else tail
             byw: dict[float, list] = {}
@@ -157,7 +208,7 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
                 byw.setdefault(c[3], []).append(i)
             df = pd.concat([run_pulse_grid(scene, [cells[i] for i in ix],
                                            duration=cell_duration(scene, w, t + extra),
-                                           parallel=parallel)
+                                           parallel=parallel, vertical_ratio=vertical)
                             for w, ix in byw.items()], ignore_index=True)
             order = np.concatenate([np.asarray(ix) for ix in byw.values()])
             df = df.iloc[np.argsort(order, kind="stable")].reset_index(drop=True)  # cells' order
@@ -166,7 +217,8 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
     from ..scene.motion import RickerPulse
     rows = []
     for shape, sign, A, W in cells:
-        pulse = RickerPulse.dimensionless(A, W, scene.structure, shape, sign)
+        pulse = RickerPulse.dimensionless(A, W, scene.structure, shape, sign,
+                                          vertical_ratio=vertical)
         dur = None if tail is None and not extra else cell_duration(
             scene, W, (FREE_TAIL if tail is None else tail) + extra)
         r = run(scene, pulse, history="minimal", duration=dur)
@@ -188,20 +240,21 @@ def _analytic_chunk(args: tuple) -> pd.DataFrame:
     fallen by the end of its run is run again :data:`~rockbench.constants.FALL_EXTENSION` seconds longer: a fall
     under way is finished (its row is the longer run's); a frame that came back keeps its
     verdict."""
-    scene_ref, overrides, cells, method, tail = args
-    return _analytic_cells(_load_scene_ref(scene_ref, overrides), cells, method, tail)
+    scene_ref, overrides, cells, method, tail, vertical = args
+    return _analytic_cells(_load_scene_ref(scene_ref, overrides), cells, method, tail,
+                           vertical=vertical)
 
 
 def _analytic_cells(scene, cells: Sequence, method: str, tail: float | None,
-                    parallel: bool = False) -> pd.DataFrame:
+                    parallel: bool = False, vertical: float = 0.0) -> pd.DataFrame:
     """The rows of analytic ``cells``, a fall under way finished (:func:`_analytic_chunk`)."""
-    df = _analytic_rows(scene, cells, method, tail, parallel=parallel)
+    df = _analytic_rows(scene, cells, method, tail, parallel=parallel, vertical=vertical)
     pending = ((df["status"] == "ok") & df["exceeded_critical"].astype(bool)
                & ~df["overturned"].astype(bool)).to_numpy()
     if pending.any():
         again = [c for c, p in zip(cells, pending) if p]
         longer = _analytic_rows(scene, again, method, tail, extra=FALL_EXTENSION,
-                                parallel=parallel)
+                                parallel=parallel, vertical=vertical)
         df = df.copy()
         idx = np.flatnonzero(pending)
         for col in MAP_COLUMNS:
@@ -232,7 +285,8 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
             store: str | os.PathLike | None = None, workers: int | None = None,
             scheduler: str | None = None, progress: bool = True,
             chunk: int | None = None, tail: float | None = None,
-            keyed_by_code: bool = True, adaptive: bool = False) -> pd.DataFrame:
+            keyed_by_code: bool = True, adaptive: bool = False,
+            vertical: float = 0.0) -> pd.DataFrame:
     """Run an overturning map of ``scene`` (a built-in name, a .toml path or a
     :class:`~rockbench.Scene`, with scene ``overrides``) with backend ``engine`` (and its
     ``settings`` overrides) and return it (:data:`MAP_COLUMNS`, sorted by pulse, sign,
@@ -252,9 +306,17 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
     :func:`reuse_map` before they are reused.
     ``adaptive``: simulate only where the verdict can change
     (:func:`rockbench.sweep.adaptive.adaptive_map`) and infer the
-    other cells; the map (and the store) then has a column ``inferred``. ``attrs``:
-    ``reused`` (cells taken from the store), ``cells_run`` (simulated now) and, adaptive,
-    ``inferred``.
+    other cells; the map (and the store) then has a column ``inferred``.
+    ``vertical``: r in [0, 3] (limit ``vertical_ratio``, as ``rockbench run --vertical``):
+    every cell's pulse has the vertical part a_v = r u_g'' (the same wavelet, in phase;
+    :class:`~rockbench.scene.motion.RickerPulse` ``vertical_ratio``), for every backend; the
+    analytic model's compiled path then calls its run kernel once per cell (the grid kernel
+    builds horizontal pulses only; ``docs/maps.md`` gives the cost), in the worker pool when
+    there is more than one worker. r is part of the store's inputs.
+    The map has a column ``outside`` (not stored: it follows from the cell): the cell's motion
+    is outside the analytic model by the one rule (:func:`cell_outside`).
+    ``attrs``: ``reused`` (cells taken from the store), ``cells_run`` (simulated now),
+    ``vertical_ratio``, ``outside`` (cells outside the model) and, adaptive, ``inferred``.
     """
     from ..runner import resolve_engines
     from ..scene.scene import Scene, apply_overrides
@@ -284,25 +346,28 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
     if chunk is not None and (isinstance(chunk, bool) or not isinstance(chunk, int)
                               or chunk < 1):
         raise ParameterError("chunk", chunk, "an integer >= 1 or None")
+    vertical = check_vertical_ratio(vertical)
     executor = "dask" if scheduler else "process"
     check_options(executor, workers, scheduler)
     _check_backend(engine)
     cells = map_cells(grid=grid, amplitude=amplitude, frequency=frequency, pulses=pulses)
     path = Path(store) if store is not None else None
-    common = (executor, workers, scheduler, progress, chunk, tail)
+    common = (executor, workers, scheduler, progress, chunk, tail, vertical)
 
     def go(stored: tuple[Path, pd.DataFrame] | None) -> pd.DataFrame:
         if not adaptive:
-            return _run_cells(sc, scene_ref, ref_name, engine, settings, method, overrides,
-                              cells, stored, *common)
-        from ..sweep.adaptive import adaptive_map
-        from ..sweep.executors import kept_pools
+            df = _run_cells(sc, scene_ref, ref_name, engine, settings, method, overrides,
+                            cells, stored, *common)
+        else:
+            from ..sweep.adaptive import adaptive_map
+            from ..sweep.executors import kept_pools
 
-        with kept_pools():            # the rounds share one pool of workers
-            return adaptive_map(sc, lambda cs, st: _run_cells(
-                sc, scene_ref, ref_name, engine, settings, method, overrides, cs, st,
-                *common), _axes(grid, amplitude, frequency),
-                [PULSES[p] for p in _pulses(pulses)], stored)
+            with kept_pools():            # the rounds share one pool of workers
+                df = adaptive_map(sc, lambda cs, st: _run_cells(
+                    sc, scene_ref, ref_name, engine, settings, method, overrides, cs, st,
+                    *common), _axes(grid, amplitude, frequency),
+                    [PULSES[p] for p in _pulses(pulses)], stored)
+        return mark_outside(df, sc, vertical)
 
     if path is None:
         return go(None)
@@ -319,7 +384,8 @@ def run_map(scene: Any, engine: str = "analytic", *, grid: Any = (100, 100),
                              f"give a --store in a folder you can write")
     try:
         with writer_lock(path, "map store"):
-            inputs = store_inputs(sc, ref_name, engine, settings, method or "", tail, keyed_by_code)
+            inputs = store_inputs(sc, ref_name, engine, settings, method or "", tail,
+                                  keyed_by_code, vertical_ratio=vertical)
             done = open_map_store(path, inputs)
             return go((path, done))
     except BaseException:
@@ -366,7 +432,7 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
                method: str | None, overrides: dict | None, cells: list,
                stored: tuple[Path, pd.DataFrame] | None, executor: str,
                workers: int | None, scheduler: str | None, progress: bool,
-               chunk: int | None, tail: float | None) -> pd.DataFrame:
+               chunk: int | None, tail: float | None, vertical: float = 0.0) -> pd.DataFrame:
     """Run the cells not yet in the store (``stored`` = (folder, its rows), or None), writing
     each finished result to it at once; return the map of ``cells``."""
     from ..sweep.executors import cpu_count, execute, local_workers
@@ -379,7 +445,8 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
     todo = [c for c in cells if cell_key(*c) not in have]
     reused = len(cells) - len(todo)
     twins: dict[str, tuple] = {}
-    if engine == "analytic" and sc.mirror_symmetric:
+    if engine == "analytic" and sc.mirror_symmetric and not vertical:
+        # (a vertical part in phase with the signed pulse is not mirrored with it)
         todo, twins = mirror_twins(todo)
     frames = [done]
     written = [len(part_files(path)) if path is not None else 0]
@@ -397,28 +464,33 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
 
     if path is not None and written[0] > 1:
         compact_map_store(path)                    # duplicates a killed compaction may have left
-    if engine == "analytic" and method == "compiled" and executor != "dask" and todo:
+    compiled_here = engine == "analytic" and method == "compiled" and executor != "dask"
+    threads = local_workers(workers) if compiled_here and executor == "process" else 1
+    if compiled_here and todo and not (vertical and threads > 1):
         # the compiled kernel in this process, its cells on numba's threads (one per core):
-        # no worker process to start, import and feed, parts of many cells
+        # no worker process to start, import and feed, parts of many cells (a vertical map's
+        # cells are run one by one: on one core here, on more in the worker pool below)
         from ..progress import bar as progress_bar
 
         scene = _load_scene_ref(scene_ref, overrides)
-        threads = (local_workers(workers) if executor == "process" else 1)
         size = chunk or max(LOCAL_CHUNK, math.ceil(len(todo) / 20))
         bar = progress_bar(len(todo), f"map {sc.name} analytic ({reused} reused)", "cell",
                            show=progress)
         try:
             for i in range(0, len(todo), size):
                 part = todo[i:i + size]
-                on_result("", _analytic_cells(scene, part, method, tail, parallel=threads > 1))
+                on_result("", _analytic_cells(scene, part, method, tail, parallel=threads > 1,
+                                              vertical=vertical))
                 bar.update(len(part))
         finally:
             bar.close()
     elif engine == "analytic":
-        n_workers = (local_workers(workers) if executor == "process"
+        n_workers = (threads if compiled_here and executor == "process"   # warned once
+                     else local_workers(workers) if executor == "process"
                      else workers or cpu_count())
         size = chunk or (max(1, min(200, math.ceil(len(todo) / (4 * n_workers)))))
-        items = [(f"chunk-{i}", (scene_ref, overrides or {}, todo[i:i + size], method, tail))
+        items = [(f"chunk-{i}", (scene_ref, overrides or {}, todo[i:i + size], method, tail,
+                                 vertical))
                  for i in range(0, len(todo), size)]
         execute(_analytic_chunk, items, on_result=on_result,
                 crashed=lambda item, why: error_rows(item[2], why),
@@ -430,7 +502,8 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
     elif todo:
         _engine_rows(scene_ref, overrides, engine, settings, todo, tail,
                      on_rows=lambda rows: on_result("", rows), executor=executor,
-                     workers=workers, dask_address=scheduler, progress=progress)
+                     workers=workers, dask_address=scheduler, progress=progress,
+                     vertical=vertical)
     if path is not None and written[0] > 1:
         compact_map_store(path)
     out = pd.concat([f for f in frames if len(f)], ignore_index=True) if any(
@@ -443,23 +516,25 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
     out = out[mask].sort_values(["pulse", "sign", "frequency", "amplitude"],
                                 ascending=[True, False, True, True]).reset_index(drop=True)
     out.attrs.update(scene=sc.name, engine=engine, method=method or "", reused=reused,
-                     cells_run=len(todo))
+                     cells_run=len(todo), vertical_ratio=vertical)
     return out
 
 
 def _engine_rows(scene_ref: Any, overrides: dict | None, engine: str, settings: dict,
-                 cells: Sequence, tail: float | None, on_rows=None,
+                 cells: Sequence, tail: float | None, on_rows=None, vertical: float = 0.0,
                  **execution) -> pd.DataFrame:
     """Map rows of engine ``cells`` (shape, sign, A, W), run through
     :func:`rockbench.sweep.run_cases` (MuJoCo batched) with ``execution`` options;
     ``on_rows(frame)`` is called with the map rows of each finished executor item (a cell, or
-    a MuJoCo batch) as it finishes."""
+    a MuJoCo batch) as it finishes. ``vertical`` > 0: each pulse's vertical ratio (the case's
+    motion carries it; without one the cases are those of a horizontal map, key for key)."""
     from ..sweep import run_cases
 
     sc = _load_scene_ref(scene_ref, overrides)
+    extra = {"vertical_ratio": float(vertical)} if vertical else {}
     cases = [{"scene": scene_ref, "overrides": overrides or {}, "engine": engine,
               "settings": settings, "duration": cell_duration(sc, W, tail),
-              "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W}}
+              "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W, **extra}}
              for sh, sg, A, W in cells]
     rows = run_cases(cases, on_rows=(None if on_rows is None else
                                      (lambda rs: on_rows(map_rows(rs)))), keep="summary",
@@ -534,7 +609,7 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
     if isinstance(old, str):
         return None, MapReuse(f"the measured map {path.name} has an unreadable {meta.name} "
                               f"({old})", "unreadable")
-    diff = [k for k in want if old.get(k) != want[k]]
+    diff = input_differences(old, want)
     if diff:
         return None, MapReuse(f"the measured map {path.name} was written for other inputs "
                               f"({', '.join(diff)} differ)", "stale")
@@ -572,6 +647,7 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
         if not d <= rtol:
             return None, MapReuse(f"the measured map {path.name} does not reproduce: at {cell} "
                                   f"max |phi|/alpha was {a:.9g}, is {b:.9g} now", "unverified")
+    df = mark_outside(df, sc)
     df.attrs.update(scene=sc.name, engine=engine, method="", reused=len(df))
     return df, MapReuse(f"measured earlier ({len(df)} cells, {want['engine_version']}), "
                         f"reproduced now at {len(m)} re-run cells (largest relative difference "

@@ -10,6 +10,9 @@ workers and can be hashed)::
      "motion": {"kind": "ricker", "shape": "symmetric", "sign": 1, "A": 3.0, "W": 4.0},
                # or {"kind": "ricker", ..., "amplitude": a_g [m/s^2], "period": T_g [s]}
                # or {"kind": "record", "path": ..., "dt": ..., "units": ..., "scale": ...}
+               # either may add "vertical_ratio" (a_v = r u_g''), a record instead
+               # "vertical_path" (its vertical channel; "vertical_dt", "vertical_units" for a
+               # headerless file)
                # or None (free rocking from phi0)
      "phi0": 0.0,                          # rad
      "duration": None}                     # s (None: the motion's length + 10 s)
@@ -49,8 +52,9 @@ __all__ = ["CASE_KEYS", "normalize_case", "case_id", "flatten_case", "case_label
 CASE_KEYS = ("scene", "overrides", "engine", "settings", "motion", "phi0", "duration")
 
 _MOTION_KINDS = ("ricker", "record", "none")
-_RICKER_KEYS = {"kind", "shape", "sign", "A", "W", "amplitude", "period"}
-_RECORD_KEYS = {"kind", "path", "dt", "units", "scale"}
+_RICKER_KEYS = {"kind", "shape", "sign", "A", "W", "amplitude", "period", "vertical_ratio"}
+_RECORD_KEYS = {"kind", "path", "dt", "units", "scale", "vertical_path", "vertical_dt",
+                "vertical_units", "vertical_ratio"}
 
 
 # =========================================================================================
@@ -151,6 +155,19 @@ def _normalize_motion(m: Any) -> dict[str, Any] | None:
         if not isinstance(out.get("path"), str):
             raise ParameterError("motion.path", out.get("path"), "a path to a record file")
         out.setdefault("scale", 1.0)
+        if out.get("vertical_path") is None:      # no vertical channel: the keys are left out
+            for k in ("vertical_path", "vertical_dt", "vertical_units"):
+                if out.pop(k, None) is not None:
+                    raise ParameterError(f"motion.{k}", m[k], "given only with vertical_path")
+        elif not isinstance(out["vertical_path"], str):
+            raise ParameterError("motion.vertical_path", out["vertical_path"],
+                                 "a path to the record file of the vertical channel")
+    if "vertical_ratio" in out:            # 0 is no vertical part: the case without the key
+        vr = out["vertical_ratio"]
+        if isinstance(vr, bool) or not isinstance(vr, (int, float, np.number)):
+            raise ParameterError("motion.vertical_ratio", vr, "a number in [0, 3]")
+        if vr == 0:
+            del out["vertical_ratio"]
     return {k: out[k] for k in sorted(out)}
 
 

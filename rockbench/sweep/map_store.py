@@ -21,7 +21,8 @@ import pandas as pd
 from ..errors import ParameterError, RockbenchError, RockbenchWarning
 
 __all__ = ["MAP_COLUMNS", "MAP_KEY", "COMPACT_EVERY", "tidy_map", "simulated_rows",
-           "cell_key", "store_inputs", "read_inputs", "part_files", "open_map_store", "write_part",
+           "cell_key", "store_inputs", "INPUT_DEFAULTS", "input_differences",
+           "describe_differences", "read_inputs", "part_files", "open_map_store", "write_part",
            "compact_map_store", "load_map_parts", "load_map", "store_error", "map_rows",
            "error_rows"]
 
@@ -111,11 +112,13 @@ def error_rows(cells, why: str) -> pd.DataFrame:
 
 
 def store_inputs(scene, scene_ref: str, engine: str, settings: dict, method: str,
-            tail: float | None, keyed_by_code: bool = True) -> dict[str, Any]:
+                 tail: float | None, keyed_by_code: bool = True,
+                 vertical_ratio: float = 0.0) -> dict[str, Any]:
     """What a store was written for. ``keyed_by_code``: include rockbench's code fingerprint
     (a store written by other code is refused); without it the store is keyed by the inputs
     and the engine's version only, and its reuse must be verified by re-running sample cells
-    (:func:`reuse_map`)."""
+    (:func:`reuse_map`). ``vertical_ratio`` r > 0 (every pulse's a_v = r u_g'') is an input
+    too; a map without one has no such key (:data:`INPUT_DEFAULTS`: it reads as 0)."""
     from ..constants import FREE_TAIL
     from ..engines import engine_info
     from .store import code_fingerprint
@@ -125,9 +128,31 @@ def store_inputs(scene, scene_ref: str, engine: str, settings: dict, method: str
                                    for r in engine_info([engine])), ""),
            "settings": {k: settings[k] for k in sorted(settings)}, "method": method,
            "duration": f"pulse window (6 T_g) + {FREE_TAIL if tail is None else tail:g} s"}
+    if vertical_ratio:
+        out["vertical_ratio"] = float(vertical_ratio)
     if keyed_by_code:
         out["code"] = code_fingerprint()
     return out
+
+
+#: Inputs a store's ``_inputs.json`` holds only when they differ from their default (stores
+#: written before them keep their identity): their value when absent.
+INPUT_DEFAULTS: dict[str, Any] = {"vertical_ratio": 0.0}
+
+
+def input_differences(old: dict[str, Any], inputs: dict[str, Any]) -> list[str]:
+    """The keys whose values differ between a store's ``old`` inputs and ``inputs``: every key
+    of ``inputs``, and those of :data:`INPUT_DEFAULTS` either way (absent = the default)."""
+    keys = list(inputs) + [k for k in INPUT_DEFAULTS if k not in inputs]
+    return [k for k in keys if old.get(k, INPUT_DEFAULTS.get(k)) !=
+            inputs.get(k, INPUT_DEFAULTS.get(k))]
+
+
+def describe_differences(old: dict[str, Any], inputs: dict[str, Any],
+                         diff: list[str]) -> str:
+    """``k=OLD (now NEW)`` for each differing key but the scene's table."""
+    return ", ".join(f"{k}={old.get(k, INPUT_DEFAULTS.get(k))!r} (now "
+                     f"{inputs.get(k, INPUT_DEFAULTS.get(k))!r})" for k in diff if k != "scene")
 
 
 def store_error(path: Path, e: OSError, doing: str) -> RockbenchError:
@@ -172,12 +197,12 @@ def open_map_store(path: Path, inputs: dict[str, Any]) -> pd.DataFrame:
                     f"holds cannot be matched to these inputs; delete the folder {path} to "
                     f"compute the map again, or give another --store")
         else:
-            diff = [k for k in inputs if old.get(k) != inputs[k]]
+            diff = input_differences(old, inputs)
             if diff:
                 raise RockbenchError(
                     f"map store {path} was written for other inputs ({', '.join(diff)} "
-                    f"differ: {', '.join(f'{k}={old.get(k)!r}' for k in diff if k != 'scene')}"
-                    f"); use another --store, or delete it to start again")
+                    f"differ: {describe_differences(old, inputs, diff)}); use another "
+                    f"--store, or delete it to start again")
             return load_map_parts(path, quarantine=True)
     elif part_files(path):
         raise RockbenchError(

@@ -170,6 +170,41 @@ def test_map_row_equals_single_run():
     assert row["max_abs_phi_over_alpha"] == pytest.approx(s.max_abs_phi_over_alpha, abs=1e-12)
 
 
+@pytest.mark.parametrize("scene", [ASYM, EPS1], ids=lambda s: s.name)
+def test_map_cells_with_a_vertical_part_equal_single_runs(scene):
+    """``run_pulse_grid(..., vertical_ratio=r)`` (the run kernel once per cell) gives each
+    cell the summary of the compiled run of the same pulse with its vertical part, bit for bit,
+    including cells that end where the ground falls faster than gravity (r = 3, the downward
+    lobes of the larger pulses); against the solve_ivp reference within PEAK_TOL."""
+    from rockbench.validity import lift_off_time
+
+    cells = [c for c in _cells(3, 2, a_range=(2.0, 8.0), w_range=(3.0, 7.0))]
+    lifted = 0
+    for r in (0.5, 3.0):
+        fast = run_pulse_grid(scene, cells, vertical_ratio=r, duration=8.0)
+        for (shape, sign, A, W), row in zip(cells, fast.itertuples()):
+            pulse = RickerPulse.dimensionless(A, W, scene.structure, shape, sign,
+                                              vertical_ratio=r)
+            s = simulate_compiled(scene, pulse, duration=8.0, settings=MINIMAL).summary
+            assert (row.overturned, row.exceeded_critical, row.fractured, row.n_impacts,
+                    row.uplifted, row.status) == (s.overturned, s.exceeded_critical,
+                                                  s.fractured, s.n_impacts, s.uplifted,
+                                                  s.status)
+            assert row.max_abs_phi_over_alpha == s.max_abs_phi_over_alpha
+            lifted += s.t_lift_off is not None
+            if (shape, sign, A) == ("symmetric", 1, 5.0):
+                ref = simulate(scene, pulse, duration=8.0, settings=MINIMAL).summary
+                assert ref.overturned == s.overturned
+                assert abs(ref.max_abs_phi_over_alpha - s.max_abs_phi_over_alpha) <= PEAK_TOL
+        assert (fast["status"] == "ok").all()
+    assert lifted >= 4
+    pulse = RickerPulse.dimensionless(8.0, 3.0, scene.structure, "symmetric", -1,
+                                      vertical_ratio=3.0)
+    assert lift_off_time(pulse) is not None
+    with pytest.raises(ValueError, match="vertical_ratio"):
+        run_pulse_grid(scene, cells[:1], vertical_ratio=3.5)
+
+
 def test_map_input_validation():
     with pytest.raises(ValueError, match="shape"):
         run_pulse_grid(ASYM, [("square", 1, 2.0, 2.0)])

@@ -285,6 +285,47 @@ def test_loss_of_contact_smooth():
     assert r.summary.lost_contact_time == pytest.approx(tau * T, rel=1e-10)
 
 
+# --- the motion's own vertical part: the default -------------------------------------------------
+def test_a_pulse_slides_under_the_normal_force_of_its_own_vertical_part():
+    """RickerPulse(0.6 g, 0.5 s, vertical_ratio=0.5) on mu = 0.3: by default its vertical part
+    (a_v = 0.5 a_g, in phase) sets the normal force. On the first (negative) lobe a_v < 0, so
+    the block slips once |a_g| = mu g / (1 + mu r) = 0.261 g, which that lobe (0.268 g) reaches;
+    without the vertical part the slip starts on the main lobe, at a_g = mu g. An explicit
+    ``vertical`` overrides: the same pulse given as ``vertical=`` is the same run, None none."""
+    mu, r, A, T = 0.3, 0.5, 0.6 * G, 0.5
+    pulse = RickerPulse(A, T, vertical_ratio=r)
+    w = lambda tau: (1 - 2 * math.pi**2 * tau**2) * math.exp(-math.pi**2 * tau**2)
+    own = sliding_response(pulse, mu)
+    lobe = brentq(lambda tau: -A * w(tau) - mu * G / (1 + mu * r), -1.0, -math.sqrt(1.5) / math.pi,
+                  xtol=1e-15)
+    assert own.summary.onset_time == pytest.approx(lobe * T, rel=1e-9)
+    given = sliding_response(RickerPulse(A, T), mu, vertical=pulse.vertical)
+    np.testing.assert_allclose(own.history.u, given.history.u, rtol=0, atol=1e-15)
+    assert own.summary.onset_time == given.summary.onset_time
+    flat = sliding_response(pulse, mu, vertical=None)
+    main = brentq(lambda tau: A * w(tau) - mu * G, -math.sqrt(1.5) / math.pi + 1e-3, 0.0,
+                  xtol=1e-15)
+    assert flat.summary.onset_time == pytest.approx(main * T, rel=1e-9)
+    assert flat.summary.final_displacement == sliding_response(RickerPulse(A, T), mu
+                                                               ).summary.final_displacement
+    assert abs(own.summary.max_abs_displacement / flat.summary.max_abs_displacement - 1) > 0.05
+
+
+def test_a_record_slides_under_the_normal_force_of_its_vertical_channel():
+    """A rectangular pulse a on [0, T] with a vertical channel c on the same samples: the block
+    slips at a - mu (g + c) during the pulse and stops at mu g after it (both channels are 0
+    then), u = -(a - a1) T^2 / 2 - ((a - a1) T)^2 / (2 a2), a1 = mu (g + c), a2 = mu g."""
+    mu, a, c, T = 0.25, 0.6 * G, -0.3 * G, 0.4
+    rec = Record([0.0, T], [a, a]).with_vertical(Record([0.0, T], [c, c]))
+    a1, a2 = mu * (G + c), mu * G
+    expected = -(a - a1) * T**2 / 2 - ((a - a1) * T) ** 2 / (2 * a2)
+    r = sliding_response(rec, mu)
+    assert r.summary.final_displacement == pytest.approx(expected, rel=1e-12)
+    flat = sliding_response(rec, mu, vertical=None)
+    assert flat.summary.final_displacement == pytest.approx(
+        rectangular_pulse_displacement(a, T, mu), rel=1e-12)
+
+
 # --- arguments ------------------------------------------------------------------------------------
 def test_bad_arguments():
     rec = Record([0.0, 1.0], [1.0, 1.0])
@@ -296,3 +337,5 @@ def test_bad_arguments():
         sliding_response(rec, 0.2, t_end=-1.0)
     with pytest.raises(ParameterError, match="horizontal"):
         sliding_response(lambda t: 0.0, 0.2)
+    with pytest.raises(ParameterError, match="vertical.*the motion's own"):
+        sliding_response(rec, 0.2, vertical="own")

@@ -143,3 +143,66 @@ def test_cli_vertical_pulse_and_record(tmp_path, capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "--vertical RATIO" in text and "positive up" in text and "m/s^2" in text
     assert "--record-vertical FILE" in text
+
+
+# --- any horizontal motion with any vertical one (WithVertical) ---------------------------------
+def test_with_vertical_pairs_any_two_motions():
+    """The horizontal's acceleration, peak and sup after t; the vertical as given; the window
+    spanning both; knots the union of both (a lift-off at a_v = -g is bracketed on them);
+    scaled scales both; picklable; a component with its own vertical part refused."""
+    import pickle
+
+    from rockbench.scene.motion import WithVertical
+    from rockbench.validity import lift_off_time
+
+    still = Record([-1.0, 2.0], [0.0, 0.0], name="still")
+    v = RickerPulse(1.5 * G, 0.3, sign=-1)
+    m = WithVertical(still, v)
+    assert m.vertical is v and m.horizontal is still
+    assert (m.t_start, m.t_end) == (-1.0, 2.0)
+    t = np.linspace(-1.0, 2.0, 301)
+    np.testing.assert_array_equal(m.acceleration(t), still.acceleration(t))
+    assert m.peak == 0.0 and m.max_abs_after(0.0) == 0.0
+    k = m.knots(-0.5, 0.5)
+    assert set(v.knots(-0.5, 0.5)) <= set(k) and k[0] == -0.5 and k[-1] == 0.5
+    assert np.all(np.diff(k) > 0)
+    # g + a_v <= 0 first where 1.5 w(tau) = 1 on the main (downward) lobe of the vertical pulse
+    from scipy.optimize import brentq
+    w = lambda tau: (1 - 2 * math.pi**2 * tau**2) * math.exp(-math.pi**2 * tau**2)
+    tau = brentq(lambda x: 1.5 * w(x) - 1.0, -0.3, 0.0, xtol=1e-15)
+    assert lift_off_time(m) == pytest.approx(tau * 0.3, abs=1e-12)
+    s = m.scaled(-2.0)
+    np.testing.assert_allclose(s.vertical.acceleration(t), -2.0 * v.acceleration(t), rtol=1e-15)
+    back = pickle.loads(pickle.dumps(m))
+    np.testing.assert_array_equal(back.vertical.acceleration(t), v.acceleration(t))
+    d = m.describe()
+    assert d["kind"] == "record" and d["vertical"]["kind"] == "ricker"
+    json.dumps(d)
+    assert m.label() == "still & vertical " + v.label()
+    with pytest.raises(ParameterError, match="horizontal"):
+        WithVertical(RickerPulse(1.0, 1.0, vertical_ratio=0.5), v)
+    with pytest.raises(ParameterError, match="vertical"):
+        WithVertical(still, RickerPulse(1.0, 1.0, vertical_ratio=0.5))
+    with pytest.raises(ParameterError, match="vertical"):
+        WithVertical(still, 3.0)
+
+
+def test_with_vertical_of_an_in_phase_pulse_is_the_pulse_with_its_vertical_ratio():
+    """WithVertical(pulse, r x pulse) is RickerPulse(..., vertical_ratio=r): the analytic model
+    (solve_ivp path, uplift at |a_g| > lambda (g + a_v) bracketed on the union of the knots)
+    gives the same history, and Newmark's block the same slip."""
+    import rockbench as rb
+    from rockbench.analytic.sliding import sliding_response
+
+    scene = load_scene("paper-asymmetric")
+    own = RickerPulse.dimensionless(3.0, 4.0, scene.structure, vertical_ratio=0.4)
+    h = RickerPulse.dimensionless(3.0, 4.0, scene.structure)
+    pair = rb.WithVertical(h, RickerPulse(0.4 * h.amplitude, h.period))
+    a = rb.run(scene, own, duration=4.0, method="DOP853")
+    b = rb.run(scene, pair, duration=4.0, method="DOP853")
+    assert a.summary.n_impacts == b.summary.n_impacts >= 1
+    assert b.summary.t_uplift == pytest.approx(a.summary.t_uplift, abs=1e-12)
+    np.testing.assert_allclose(b.history["phi"], a.history["phi"], rtol=0, atol=1e-9 * scene.alpha)
+    s1 = sliding_response(own, 0.1).summary
+    s2 = sliding_response(pair, 0.1).summary
+    assert s2.final_displacement == pytest.approx(s1.final_displacement, rel=1e-12)

@@ -425,3 +425,48 @@ def test_records_csv_units_are_parsed_and_bounded(tmp_path, monkeypatch):
     monkeypatch.setenv("ROCKBENCH_RECORD_BYTES", "10")
     with pytest.raises(RecordError, match="records.csv has .* bytes"):
         listed_metadata(tmp_path / "a.dat")
+
+
+def test_records_csv_names_vertical_channels(tmp_path):
+    """A ``vertical`` column: an AT2 pair listed without dt (the headers give it), a headerless
+    pair whose channel takes its record's dt and units; the channels are not records; each
+    record loads with its channel; a missing channel, one naming the record itself, and a
+    headerless file without a dt are errors naming the listing."""
+    import shutil
+
+    from rockbench.scene.records import bundled_dir, listed_metadata
+
+    for name in ("IV1940_ElCentro_180", "IV1979_ElCentroArray4_230"):
+        shutil.copy(bundled_dir() / f"{name}.AT2", tmp_path / f"{name}.AT2")
+    (tmp_path / "H.dat").write_text("1 2 3 4\n5 6 7 8\n")
+    (tmp_path / "V.dat").write_text("-1 -1 -2 -2\n0 0 1 1\n")
+    listing = tmp_path / "records.csv"
+    listing.write_text("record,dt_s,units,vertical\n"
+                       "IV1940_ElCentro_180,,,IV1979_ElCentroArray4_230.AT2\n"
+                       "H,0.01,cm/s^2,V\n")
+    recs, notes = find_records(tmp_path)
+    assert [r["name"] for r in recs] == ["H", "IV1940_ElCentro_180"] and not notes
+    h, at = recs
+    assert h["vertical"] == str((tmp_path / "V.dat").resolve())
+    assert (h["vertical_dt"], h["vertical_units"]) == (0.01, "cm/s2")
+    assert at["vertical"].endswith("IV1979_ElCentroArray4_230.AT2")
+    assert at["vertical_dt"] is None and at["dt"] is None
+    assert listed_metadata(tmp_path / "H.dat")["vertical"] == h["vertical"]
+    rec = load_record(h["path"], dt=h["dt"], units=h["units"], vertical=h["vertical"],
+                      vertical_dt=h["vertical_dt"], vertical_units=h["vertical_units"])
+    np.testing.assert_allclose(rec.vertical.samples, 0.01 * np.array([-1, -1, -2, -2, 0, 0,
+                                                                       1, 1]), rtol=1e-15)
+    both = load_record(at["path"], vertical=at["vertical"])
+    assert both.vertical is not None and both.describe()["vertical_resampled"]
+    listing.write_text("record,dt_s,units,vertical\nH,0.01,cm/s^2,GONE\n")
+    with pytest.raises(RecordError, match="records.csv.*'H'.*'GONE'.*no file"):
+        find_records(tmp_path)
+    listing.write_text("record,dt_s,units,vertical\nH,0.01,cm/s^2,H.dat\n")
+    with pytest.raises(RecordError, match="names itself"):
+        find_records(tmp_path)
+    listing.write_text("record,dt_s,units,vertical\nH,,cm/s^2,V\n")
+    with pytest.raises(RecordError, match="headerless"):
+        find_records(tmp_path)
+    listing.write_text("record,units\nH,cm/s^2\n")                 # no dt, no vertical column
+    with pytest.raises(RecordError, match="no dt column"):
+        find_records(tmp_path)
