@@ -271,7 +271,7 @@ def test_a_users_plan_asks_for_the_map_only_when_its_scene_gives_a_friction(tmp_
 
 @needs_engine
 def test_the_report_section_counts_the_cells_with_the_scenes_friction(tmp_path):
-    from rockbench.campaign.run import _validity_section
+    from rockbench.campaign.parts import _validity_section
     from rockbench.report.validity_figures import validity_html
 
     assert _validity_section(None, ["analytic", *ENGINES], tmp_path, 1, False) == {}

@@ -1,0 +1,250 @@
+"""The parts of a campaign (``rockbench report``): the case-by-case comparisons, the speed
+sweep, the maps, the decision, the records, fragility and the validity map. Each part is a
+function of the campaign's context (a picklable dict made by
+:func:`rockbench.campaign.run.measure_campaign`), so that a lane of them can run in a process
+of its own (:func:`rockbench.sweep.executors.run_parts`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..report import tables as T
+from ..runner import REFERENCE
+from ..scene.records import find_records
+from ..sweep import store as S
+from .run import _comparisons, _pulse_duration, _sweep
+
+__all__ = ["PARTS", "LANES"]
+
+
+# ==========================================================================================
+# The parts of a campaign (each a function of the campaign's context, so that a lane of them
+# can run in another process: rockbench.sweep.executors.run_parts)
+# ==========================================================================================
+def _part_comparisons(c: dict[str, Any]) -> list[dict[str, Any]]:
+    """1 + 2: the pulse cases, the fracture cases and free rocking of every scene."""
+    plan, names = c["plan"], c["names"]
+    jobs = []
+    shapes = {(shape, int(sign)) for shape, sign in plan["pulse_shapes"]}
+    for scene in plan["scenes"]:
+        mirror = _mirror_symmetric(scene)
+        for (A, W) in plan["pulse_points"]:
+            for shape, sign in plan["pulse_shapes"]:
+                if mirror and int(sign) == -1 and (shape, 1) in shapes:
+                    continue      # the mirror image of the +1 case (Scene.mirror_symmetric)
+                jobs.append({"kind": "pulse", "scene": scene, "engines": names,
+                             "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
+                                        "A": float(A), "W": float(W)},
+                             "duration": _pulse_duration(scene, A, W, shape,
+                                                         plan["pulse_tail"])})
+    for scene, shape, sign, A, W in plan["fracture_cases"]:
+        jobs.append({"kind": "fracture", "scene": scene, "engines": names,
+                     "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
+                                "A": float(A), "W": float(W)},
+                     "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
+    for scene in plan["scenes"]:
+        jobs.append({"kind": "free", "scene": scene, "engines": names, "motion": None,
+                     "phi0_over_alpha": plan["free_phi0"], "duration": plan["free_duration"]})
+    return _comparisons(jobs, cache=c["cache"], desc="comparisons", **c["run"])
+
+
+def _mirror_symmetric(scene: Any) -> bool:
+    """Whether a plan's scene is its own mirror image (its reversed pulses are not run)."""
+    from ..scene import Scene, load_scene
+
+    return (scene if isinstance(scene, Scene) else load_scene(scene)).mirror_symmetric
+
+
+def _part_speed(c: dict[str, Any]) -> list[dict[str, Any]]:
+    """3: speed against accuracy (every engine through the plan's time steps)."""
+    plan = c["plan"]
+    dc = plan["dt_case"]
+    dur = _pulse_duration(dc["scene"], dc["A"], dc["W"], dc["shape"], plan["dt_tail"])
+    jobs = [{"kind": "dt", "scene": dc["scene"], "engine": e, "dt": float(dt),
+             "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")}},
+             "duration": dur}
+            for e in c["names"] if e != REFERENCE for dt in plan["dt_sweep"]]
+    return _comparisons(jobs, cache=c["cache"], desc="time steps", **c["run"])
+
+
+def _part_maps(c: dict[str, Any]) -> dict[str, Any]:
+    """4: overturning maps at the paper's resolution (paper Figs. 4-7)."""
+    from .maps import run_maps
+
+    run = c["run"]
+    return run_maps(c["names"], S.store_path(c["store_dir"], "maps"), full=c["full"],
+                    quick=c["quick"], measured=c["out"] / "engine-maps",
+                    progress=run["progress"], workers=run["workers"],
+                    scheduler=run["dask_address"] if run["executor"] == "dask" else None,
+                    maps=c["plan"]["maps"])
+
+
+def _part_choice(c: dict[str, Any]) -> dict[str, Any]:
+    """5: choosing a modelling approach (the decision, the stability sweep)."""
+    from .choice import run_choice
+
+    plan, run = c["plan"], c["run"]
+    return run_choice(c["names"], c["store_dir"], quick=c["quick"], full=c["full"],
+                      workers=run["workers"], progress=run["progress"],
+                      scene=plan["choice_scene"], stress_scene=plan.get("stress_scene"),
+                      stress_hybrid=plan.get("stress_hybrid_scene"),
+                      evidence=plan.get("choice_evidence", "quick"))
+
+
+def _part_records(c: dict[str, Any]) -> tuple[pd.DataFrame, list[str]]:
+    """6: records (the peak rotation per record and frame), and the notes of their folder."""
+    notes: list[str] = []
+    if c["records_dir"] is None:
+        return pd.DataFrame(), notes
+    return _records(c["records_dir"], c["plan"], c["names"], notes, store=c["sweep_store"],
+                    **c["run"]), notes
+
+
+def _part_fragility(c: dict[str, Any]) -> dict[str, Any]:
+    """7: fragility over an ensemble of records (not in the quick campaign)."""
+    if c["quick"]:
+        return {}
+    from .fragility import fragility_section
+
+    run = c["run"]
+    return fragility_section(c["plan"]["record_frames"], c["names"],
+                             records=c["fragility_records"],
+                             size="full" if c["full"] else "default",
+                             store=S.store_path(c["store_dir"], "fragility", keyed=False),
+                             export_dir=c["out"] / "fragility-export",
+                             executor=run["executor"], workers=run["workers"],
+                             scheduler=run["dask_address"], progress=run["progress"])
+
+
+def _part_validity(c: dict[str, Any]) -> dict[str, Any]:
+    """8: where the analytic model holds (a user's scene with its own friction)."""
+    return _validity_section(c["plan"].get("validity_map"), c["names"], c["store_dir"],
+                             c["run"]["workers"], c["run"]["progress"])
+
+
+#: The parts of a campaign, in the order of the page's run-time table.
+PARTS = {"comparisons": _part_comparisons, "speed": _part_speed, "maps": _part_maps,
+          "choice": _part_choice, "records": _part_records, "fragility": _part_fragility,
+          "validity map": _part_validity}
+#: The two lanes of the local executor (the first in this process), each part's CPU measured
+#: on the paper's plan (runtime.csv) so that both lanes end near together.
+LANES = [["comparisons", "speed", "records", "validity map"],
+          ["maps", "choice", "fragility"]]
+
+
+def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], store_dir: Path,
+                      workers: int | None, progress: bool) -> dict[str, Any]:
+    """The validity map of the plan's ``validity_map`` (``scene``, ``grid`` n, ``tail`` [s];
+    None: none) with the campaign's engines, as the page's section wants it
+    (:func:`rockbench.report.validity_figures.validity_html`); {} without one."""
+    if not spec:
+        return {}
+    from ..scene import load_scene
+    from ..studies.validity_map import default_axes, validity_map
+    from ..validity import friction_of
+
+    scene = load_scene(spec["scene"])
+    engines = [e for e in names if e != REFERENCE]
+    out = {"scene": scene.name, "friction": friction_of(scene), "tolerance": 0.10,
+           "a_mu": friction_of(scene) / math.tan(scene.alpha),
+           "engines": engines, "shape": "symmetric", "sign": 1, "tail": spec["tail"]}
+    if not engines:
+        return dict(out, error="no engine ran in this campaign")
+    A, W = default_axes(scene, int(spec["grid"]))
+    try:
+        frame = validity_map(scene, A=A, W=W, engines=engines, tolerance=out["tolerance"],
+                             tail=spec["tail"], workers=workers, progress=progress,
+                             store=store_dir if S.have_pyarrow() else None)
+    except Exception as e:  # noqa: BLE001 - the page says it, the rest of the report stands
+        return dict(out, error=f"{type(e).__name__}: {e}")
+    return dict(out, frame=frame)
+
+
+def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],
+                  meta: Mapping[str, dict[str, Any]]) -> pd.DataFrame:
+    """``rows`` (record peaks) with the analytic model's sensitivity band of each (record,
+    scene, polarity) and where each backend's peak stands against it (columns band_*,
+    within_band; :mod:`rockbench.studies.sensitivity`). ``durations``: run length [s] per record path
+    (None: the default); ``meta``: dt and units per path of a headerless record."""
+    from ..scene import load_scene
+    from ..scene.motion import motion_from_spec
+    from ..studies.sensitivity import band
+
+    out = rows.copy()
+    for c in ("band_low", "band_nominal", "band_high", "band_verdict_agreement",
+              "band_distance"):
+        out[c] = math.nan
+    out["within_band"] = pd.array([None] * len(out), dtype="boolean")
+    for (path, scene, pol), g in out.groupby(["path", "scene", "polarity"], sort=False):
+        sc = load_scene(scene)
+        spec = {"kind": "record", "path": path, "scale": float(pol)}
+        spec.update(meta.get(path, {}))
+        try:
+            b = band(sc, motion_from_spec(spec, sc.structure),
+                     duration=durations.get(path))
+        except Exception:  # noqa: BLE001 - a band that cannot be computed stays NaN
+            continue
+        out.loc[g.index, ["band_low", "band_nominal", "band_high", "band_verdict_agreement"]] \
+            = [b.low, b.nominal, b.high, b.verdict_agreement]
+        for i in g.index:
+            if str(out.at[i, "status"]) != "ok":
+                continue
+            j = b.judge(float(out.at[i, "max_abs_phi_over_alpha"]),
+                        overturned=bool(out.at[i, "overturned"]))
+            out.at[i, "within_band"] = bool(j.inside)
+            out.at[i, "band_distance"] = j.distance
+    return out
+
+
+def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list[str], *,
+             store: Path | None, **run: Any) -> pd.DataFrame:
+    """Part 5: every record on every frame of ``plan["record_frames"]``, both polarities, with
+    the analytic model's sensitivity band of each."""
+    recs, rnotes = find_records(records_dir)
+    notes.extend(rnotes)
+    if plan["max_records"]:
+        recs = recs[: plan["max_records"]]
+    frames = plan["record_frames"]
+    rec_cases = []
+    durations: dict[Any, Any] = {}
+    for rec in recs:
+        rec_duration = None
+        cap = plan.get("record_duration")
+        if plan["record_tail"] is not None or cap is not None:
+            from ..scene.records import load_record
+            r = load_record(rec["path"], dt=rec["dt"], units=rec["units"])
+            tail = plan["record_tail"] if plan["record_tail"] is not None else 10.0
+            rec_duration = float(r.t_end - r.t_start + tail)
+            if cap is not None:
+                rec_duration = min(rec_duration, float(cap))
+        durations[rec["path"]] = rec_duration
+        for frame, scene in frames.items():
+            for pol in (1.0, -1.0):
+                m = {"kind": "record", "path": rec["path"], "scale": pol}
+                if rec["dt"] is not None:
+                    m.update(dt=rec["dt"], units=rec["units"])
+                for e in names:
+                    rec_cases.append({"scene": scene, "engine": e, "motion": m,
+                                      "duration": rec_duration})
+    records = pd.DataFrame()
+    rows = T.sweep_rows(_sweep(rec_cases, store=store, **run))
+    if len(rows):
+        byscene = {v: k for k, v in frames.items()}
+        name_of = {str(r["path"]): r["name"] for r in recs}       # by path, never the stem
+        rows["record"] = [name_of.get(str(p), Path(p).stem) for p in rows["path"]]
+        rows["frame"] = [byscene.get(s, s) for s in rows["scene"]]
+        rows["polarity"] = [int(round(float(v))) for v in rows["polarity"]]
+        rows = T.with_verdicts(rows, ("record", "frame", "polarity"))
+        meta = {r["path"]: {"dt": r["dt"], "units": r["units"]} for r in recs
+                if r["dt"] is not None}
+        rows = _record_bands(rows, durations, meta)
+        first = ["record", "frame", "scene", "polarity", "backend"]
+        records = rows[first + [c for c in rows.columns if c not in first + ["path"]]]
+    if not recs:
+        notes.append(f"no record files found under {records_dir}")
+    return records
