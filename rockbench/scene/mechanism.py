@@ -325,6 +325,25 @@ def geometric_limit(mech) -> float:
     if not isinstance(mech, FrameMechanism):
         return mech.limit()
     s = mech.direction
+    if _parallelogram(mech):
+        # equal, parallel columns: the linkage stays a parallelogram (the beam translates) and
+        # folds flat when the columns' pivot-to-top-corner lines AB, DC reach the base line,
+        # i.e. when AB's angle phiAB0 + s phi [rad] reaches pi (s = +1) or 0 (s = -1): the
+        # tangency the search below finds numerically (tested against it)
+        return math.pi - mech._phiAB0 if s > 0 else mech._phiAB0
+    return _searched_limit(mech)
+
+
+def _parallelogram(mech: "FrameMechanism") -> bool:
+    """Equal and parallel columns (B0 - A = C0 - D)."""
+    return (abs(mech._rho0 - mech._rho1) <= 1e-12 * mech._rho0
+            and abs(mech._phiAB0 - mech._phiCD0) <= 1e-12)
+
+
+def _searched_limit(mech: "FrameMechanism") -> float:
+    """:func:`geometric_limit` by search: the loop closure's margin stepped over (0, pi], a
+    crossing bisected, a tangency minimized."""
+    s = mech.direction
     scale = mech._rho1 ** 2
 
     def margin(x: float) -> float:

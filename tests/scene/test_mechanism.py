@@ -196,6 +196,22 @@ def test_geometric_limit_is_the_toggle_of_the_asymmetric_frame(direction):
     assert min(abs(bd - (r1 + L)), abs(bd - abs(r1 - L))) < 1e-6 * L
 
 
+@pytest.mark.parametrize("direction", [1, -1])
+@pytest.mark.parametrize("width, height, span", [(1.0, 7.0, 8.0), (0.4, 3.0, 2.5),
+                                                 (2.0, 4.0, 9.0)])
+def test_a_parallelogram_folds_flat_at_half_pi_plus_alpha(direction, width, height, span):
+    """Equal columns: the closed form pi/2 + alpha equals the searched tangency."""
+    from rockbench.scene.mechanism import _searched_limit
+
+    f = Frame(column_width=width, column_height_left=height, column_height_right=height,
+              span=span, beam_width=span + width + 1.0, beam_height=1.0, mass_ratio=5.0)
+    mech = mechanism(f, direction)
+    lim = geometric_limit(mech)
+    assert lim == pytest.approx(math.pi / 2 + f.alpha, abs=1e-12)
+    assert lim == pytest.approx(_searched_limit(mech), abs=1e-6)   # a tangency: the search
+    # finds it to the square root of its margin tolerance
+
+
 def test_frame_mechanism_rejects_a_bad_direction():
     with pytest.raises(ValueError, match="direction"):
         FrameMechanism(PAPER_ASYM, 0)
