@@ -19,3 +19,9 @@ FREE_TAIL = 10.0
 #: the reference model itself. A frame just past its critical angle leaves it at the rate p
 #: (about 1-2 1/s for the paper's frames): 20 s covers a start 1e-9 rad beyond it.
 FALL_EXTENSION = 20.0
+
+#: The one ladder of engine time steps [s], coarse to fine: what a work-precision sweep
+#: (``rockbench tradeoff``), a search (``rockbench advise``, the report) and a precision curve
+#: of dt run by default (:func:`rockbench.studies.tradeoff.settings_grid`,
+#: :func:`rockbench.studies.advise.precision_knob`).
+DT_LADDER: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)

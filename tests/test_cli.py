@@ -528,9 +528,10 @@ def test_tradeoff_settings_reach_the_sweep_in_the_one_grammar(capsys, monkeypatc
                  "--setting", "pymunk.iterations=30,collision_slop=1e-4",
                  "--setting", "mujoco.impratio=10"]) == 2
     assert seen["engines"] == ["pymunk", "mujoco"]
-    assert seen["settings"] == [{"__engine__": "pymunk", "iterations": 30,
-                                 "collision_slop": 1e-4},
-                                {"__engine__": "mujoco", "impratio": 10.0}]
+    from rockbench.engines.setting_text import Overrides
+    assert seen["settings"] == [Overrides("pymunk", (("iterations", 30),
+                                                     ("collision_slop", 1e-4))),
+                                Overrides("mujoco", (("impratio", 10.0),))]
 
 
 def test_engine_option_repeatable_and_comma_lists_are_one_option(capsys, monkeypatch):

@@ -13,6 +13,7 @@ def test_fingerprint_hashes_the_physics_and_nothing_else():
     assert not any(f.startswith(("cli", "report/", "testing/", "campaign")) for f in files)
     assert not any(f.startswith("studies/") and f != "studies/sensitivity.py" for f in files)
     assert "studies/sensitivity.py" in files         # the analytic band is physics
+    assert {"verdict.py", "run_length.py"} <= set(files)   # a run's verdict and its length
     assert "plotting.py" not in files
     assert "scenarios/paper-plan.toml" not in files and "scenarios/cases.toml" not in files
     assert "scenarios/paper-asymmetric.toml" in files

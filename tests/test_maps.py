@@ -455,7 +455,7 @@ def test_a_vertical_map_runs_every_cell_with_its_vertical_part(tmp_path):
     either direction, saying which."""
     import json
 
-    from rockbench.studies.maps import cell_duration
+    from rockbench.run_length import pulse_run_length
 
     scene = rb.load_scene("paper-asymmetric")
     store = tmp_path / "v.parquet"
@@ -464,7 +464,7 @@ def test_a_vertical_map_runs_every_cell_with_its_vertical_part(tmp_path):
     assert "overturning map, a_v = 0.5 a_g" in rb.plot_map(v)._suptitle.get_text()
     for row in v.iloc[[0, 4, 8, 13, 17]].itertuples():
         r = rb.run(scene, _pulse(scene, row, 0.5), method="compiled",
-                   duration=cell_duration(scene, row.frequency, 0.5))
+                   duration=pulse_run_length(row.frequency, scene.p, 0.5))
         assert r.summary.max_abs_phi_over_alpha == row.max_abs_phi_over_alpha
         assert (r.summary.overturned, r.summary.n_impacts) == (row.overturned, row.n_impacts)
     ref = run_map("paper-asymmetric", method="solve_ivp", vertical=0.5, workers=1, **VGRID)
@@ -517,7 +517,7 @@ def test_an_engine_map_moves_the_ground_vertically():
     """Engine cells carry the vertical part: each row of a pymunk map with r = 0.5 is pymunk's
     run under that pulse, and differs from the horizontal map's."""
     pytest.importorskip("pymunk")
-    from rockbench.studies.maps import cell_duration
+    from rockbench.run_length import pulse_run_length
 
     scene = rb.load_scene("paper-asymmetric")
     kw = dict(VGRID, grid=(2, 2), pulses="symmetric+")
@@ -525,7 +525,7 @@ def test_an_engine_map_moves_the_ground_vertically():
     assert (e["status"] == "ok").all() and e.attrs["vertical_ratio"] == 0.5
     for row in e.itertuples():
         r = rb.run(scene, _pulse(scene, row, 0.5), engine="pymunk",
-                   duration=cell_duration(scene, row.frequency, 0.5))
+                   duration=pulse_run_length(row.frequency, scene.p, 0.5))
         assert r.summary.max_abs_phi_over_alpha == pytest.approx(row.max_abs_phi_over_alpha,
                                                                  rel=1e-12)
     flat = run_map("paper-asymmetric", "pymunk", workers=1, **kw)

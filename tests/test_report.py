@@ -385,8 +385,8 @@ def test_campaign_bad_input(tmp_path):
 def test_plan_fracture_cases_fracture_in_the_analytic_model():
     """The campaign's fracture cases do what cases.toml says: the analytic model fractures the
     tendons in each; the first survives, the others overturn."""
-    from rockbench.campaign.run import _pulse_duration
     from rockbench.campaign.plan import campaign_plan
+    from rockbench.run_length import pulse_run_length
 
     cases = campaign_plan()["fracture_cases"]
     assert len(cases) == 3 and campaign_plan(quick=True)["fracture_cases"] == ()
@@ -394,7 +394,7 @@ def test_plan_fracture_cases_fracture_in_the_analytic_model():
         sc = rb.load_scene(scene)
         m = rb.RickerPulse.dimensionless(A=A, W=W, structure=sc.structure, shape=shape,
                                          sign=sign)
-        s = rb.run(sc, m, duration=_pulse_duration(scene, A, W, shape, 6.0),
+        s = rb.run(sc, m, duration=pulse_run_length(W, sc.p, 6.0),
                    history="minimal").summary
         assert s.fractured, (scene, A, W)
         assert s.overturned == (k > 0), (scene, A, W)

@@ -23,8 +23,17 @@ def test_settings_grid_and_labels():
     labels = [s.label for s in g]
     assert labels == ["dt=0.002", "dt=0.001", "dt=0.002,iterations=50", "dt=0.001,iterations=50"]
     assert g[1].refined().label == "dt=0.00025"
-    assert T.parse_setting("pymunk:collision_slop=1e-4") == {"__engine__": "pymunk",
-                                                             "collision_slop": 1e-4}
+    # the older spelling ENGINE:KEY=VALUE reads as ENGINE.KEY=VALUE, typed by the Settings
+    from rockbench.engines.setting_text import Overrides, parse_overrides
+    for text in ("pymunk:collision_slop=1e-4", "pymunk.collision_slop=1e-4"):
+        over = parse_overrides(text)
+        assert over.engine == "pymunk" and over.for_engine("pymunk") == {"collision_slop": 1e-4}
+    g = T.settings_grid(["pymunk"], [1e-3], ["pymunk:iterations=50", "pymunk.iterations=50"])
+    assert [s.label for s in g] == ["dt=0.001", "dt=0.001,iterations=50"]
+    assert dict(g[1].overrides)["iterations"] == 50 and isinstance(
+        dict(g[1].overrides)["iterations"], int)
+    assert T.settings_grid(["pymunk"], [1e-3], [Overrides("pymunk", (("iterations", 50),))]
+                           ) == g
 
 
 def test_case_error_and_classes():

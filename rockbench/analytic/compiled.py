@@ -67,10 +67,11 @@ import numpy as np
 import pandas as pd
 
 from .._jit import CpuClock
-from ..constants import FREE_TAIL, G
+from ..constants import G
 from ..errors import BackendUnavailable, ParameterError, check_positive
 from ..result import (Cost, Result, Summary, events_frame,
                       output_grid)
+from ..run_length import run_length
 from ..scene.motion import Record, RickerPulse
 from ..scene.scene import Scene
 from ..scene.structure import Frame
@@ -89,7 +90,7 @@ from .kernel_run import _run
 #: Columns of the frame returned by :func:`run_pulse_grid`, in order.
 MAP_COLUMNS = ("amplitude", "frequency", "pulse", "sign", "overturned", "exceeded_critical",
                "max_abs_phi_over_alpha", "n_impacts", "fractured", "uplifted", "t_overturn",
-               "status", "reason", "cpu_s")
+               "status", "reason", "cpu_s", "phi_end", "intact_end")
 
 
 def _require_numba() -> None:
@@ -326,7 +327,7 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
     t0 = float(motion.t_start) if motion is not None else 0.0
     m_end = float(motion.t_end) if motion is not None else 0.0
     if duration is None:
-        duration = max(m_end - t0, 0.0) + FREE_TAIL
+        duration = run_length(motion)
     duration = check_positive("duration", duration)
     phi0, phidot0 = float(phi0), float(phidot0)
     for name, v in (("phi0", phi0), ("phidot0", phidot0)):
@@ -427,7 +428,7 @@ def _each_pulse(scene, vr, geo, sc, shapes, signs, As, Ws, dur, rtol, atol, v_re
                                           int(signs[i]), vertical_ratio=vr)
         mk, mp, rt, ra, ext, suf, rsuf = _motion_arrays(pulse)
         t0, m_end = float(pulse.t_start), float(pulse.t_end)
-        t_end = t0 + (dur if dur > 0.0 else (m_end - t0) + FREE_TAIL)
+        t_end = t0 + (dur if dur > 0.0 else run_length(pulse))
         t_lift = lift_off_time(pulse, t0, t_end)
         if t_lift is not None:
             t_end = t_lift
@@ -461,7 +462,8 @@ def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = No
         shape "symmetric"/"antisymmetric" (or 1/2), sign +1/-1, A = a_g / (g tan alpha) > 0,
         W = omega_g / p > 0 (alpha, p of the scene's taller column).
     duration : float, optional
-        Simulated time [s] from the pulse's start (-3 T_g); default 6 T_g + 10 s (as simulate).
+        Simulated time [s] from the pulse's start (-3 T_g); default
+        :func:`rockbench.run_length.run_length` of the pulse (as simulate).
     rest_ratio, rtol, atol, eta_factor : as :class:`AnalyticSettings` (defaults identical;
         rest_ratio None means :data:`rockbench.analytic.rules.REST_RATIO`, read at the call).
     parallel : bool
@@ -477,7 +479,10 @@ def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = No
     Returns a frame with :data:`MAP_COLUMNS`, one row per cell in the order given. ``status`` is
     "ok" or "invalid" (``reason`` says why the kernel could not advance); ``cpu_s`` is the
     process CPU time of the whole call divided by the number of cells (an amortized share: with
-    ``parallel=True`` it adds the CPU time of every thread).
+    ``parallel=True`` it adds the CPU time of every thread); ``phi_end`` [rad] and
+    ``intact_end`` are the last state of each run (whether its fall is under way:
+    :func:`rockbench.verdict.fall_under_way`). A map store keeps the columns of
+    :data:`rockbench.sweep.map_store.MAP_COLUMNS`.
     """
     _require_numba()
     rows = list(cells)
@@ -539,4 +544,5 @@ def run_pulse_grid(scene: Scene, cells: Iterable, *, duration: float | None = No
         "status": np.where(st == 0, "ok", "invalid"),
         "reason": reason,
         "cpu_s": np.full(n, cpu),
+        "phi_end": res[:, _O_PHI], "intact_end": res[:, _O_INTACT] != 0.0,
     })    # keys in MAP_COLUMNS's order (reordering by columns= costs 0.1 ms a call)

@@ -56,10 +56,11 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from ..constants import FREE_TAIL, G
+from ..constants import G
 from ..errors import ParameterError, check_positive, check_range
 from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, events_frame,
                       output_grid)
+from ..run_length import run_length
 from ..scene.scene import Scene
 from ..validity import lift_off_time
 from . import rules
@@ -179,7 +180,7 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
     mot = motion if motion is not None else _Zero()
     t0 = float(mot.t_start)
     if duration is None:
-        duration = max(mot.t_end - t0, 0.0) + FREE_TAIL
+        duration = run_length(motion)
     duration = check_positive("duration", duration)
     phi0 = float(phi0)
     phidot0 = float(phidot0)

@@ -29,6 +29,7 @@ from ..studies.map_agreement import (describe_shift, map_agreement,
                                      mark_near_boundary)
 from ..report.words import agreement_words
 from ..studies.maps import reuse_map, run_map
+from ..sweep.map_store import map_store_path
 
 __all__ = ["engine_axes", "run_maps", "is_fast"]
 
@@ -97,7 +98,7 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
         if not is_fast(eng):
             return None, (0, 0), "--quick maps the fast engines only"
         g = (4, 4)
-        return (run_map(sc, eng, store=store / f"{lab}_{eng}_4x4.parquet",
+        return (run_map(sc, eng, store=map_store_path(store, lab, eng, "4x4"),
                         **dict(axes, grid=g), **run), g, "computed now")
     why = "no measured map"
     if measured is not None:
@@ -106,14 +107,14 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
         fg, mg = tuple(maps.get("full_grid", maps["measured_grid"])), tuple(maps["measured_grid"])
         whys = []
         for g in dict.fromkeys((fg, mg)):
-            path = measured / f"{lab}_{eng}_{g[0]}x{g[1]}.parquet"
+            path = map_store_path(measured, lab, eng, f"{g[0]}x{g[1]}")
             df, w = reuse_map(path, sc, eng, **dict(axes, grid=g))
             if df is not None and not (full and g != fg):   # --full wants the finest
                 return df, g, w
             whys.append(w)
         why = whys[-1] if len(whys) == 1 else f"{whys[0]}; {whys[1]}"
         if full:
-            path = measured / f"{lab}_{eng}_{fg[0]}x{fg[1]}.parquet"
+            path = map_store_path(measured, lab, eng, f"{fg[0]}x{fg[1]}")
             if path.exists() and getattr(whys[0], "kind", "") != "partial":  # not resumable
                 shutil.rmtree(path)
             df = run_map(sc, eng, store=path, keyed_by_code=False, adaptive=fg != mg,
@@ -123,7 +124,7 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
     if g is None:
         return None, (0, 0), why
     g = tuple(g)
-    return (run_map(sc, eng, store=store / f"{lab}_{eng}_{g[0]}x{g[1]}.parquet",
+    return (run_map(sc, eng, store=map_store_path(store, lab, eng, f"{g[0]}x{g[1]}"),
                     **dict(axes, grid=g), **run), g, f"computed now ({why})")
 
 
@@ -149,7 +150,7 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
         grid_a = dict(grid_a, grid=(12, 12))
     for sc in scenes:
         lab = scene_label(sc)
-        out["analytic"][lab] = run_map(sc, "analytic", store=store / f"{lab}_analytic.parquet",
+        out["analytic"][lab] = run_map(sc, "analytic", store=map_store_path(store, lab, "analytic"),
                                        **grid_a, **run)
     rows = []
     for sc in (eng_scenes[:1] if quick else eng_scenes):
@@ -168,7 +169,7 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
             key = (lab, g)
             if key not in out["overlay_ref"]:
                 out["overlay_ref"][key] = mark_near_boundary(run_map(
-                    sc, "analytic", store=store / f"{lab}_analytic_{g[0]}x{g[1]}.parquet",
+                    sc, "analytic", store=map_store_path(store, lab, "analytic", f"{g[0]}x{g[1]}"),
                     **cells, **run), sc, tail=axes["tail"])
             ref = out["overlay_ref"][key]
             out["engine"][(lab, eng)] = df

@@ -13,6 +13,7 @@ import pandas as pd
 
 from ..report import campaign_page as P
 from ..report.conclusions import campaign_conclusion
+from ..run_length import describe
 from ..sweep.executors import cpu_count
 
 __all__ = ["write_page", "model_row"]
@@ -120,9 +121,9 @@ def write_page(t: Any, out: Path) -> Path:
         "Overturning maps" + (" (paper Figs. 4-7)" if t.paper else ""), maps_html(
             maps, out / "figures",
             analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
-                          f"W in {mp['analytic_frequency']}, pulse window + 10 s",
-            axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, pulse window "
-                 f"+ {mp['engine_tail']:g} s", paper=t.paper))
+                          f"W in {mp['analytic_frequency']}, {describe('pulse')}",
+            axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, "
+                 f"{describe('pulse', mp['engine_tail'])}", paper=t.paper))
     if t.validity:
         from ..report.validity_figures import validity_html
         sections["validity-section"] = ("Where the analytic model holds",

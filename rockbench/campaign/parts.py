@@ -17,7 +17,8 @@ from ..report import tables as T
 from ..runner import REFERENCE
 from ..scene.records import find_records
 from ..sweep import store as S
-from .run import _comparisons, _pulse_duration, _sweep
+from ..run_length import pulse_run_length, run_length
+from .run import _comparisons, _sweep
 
 __all__ = ["PARTS", "LANES"]
 
@@ -40,17 +41,24 @@ def _part_comparisons(c: dict[str, Any]) -> list[dict[str, Any]]:
                 jobs.append({"kind": "pulse", "scene": scene, "engines": names,
                              "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
                                         "A": float(A), "W": float(W)},
-                             "duration": _pulse_duration(scene, A, W, shape,
-                                                         plan["pulse_tail"])})
+                             "duration": pulse_run_length(W, _p(scene),
+                                                          plan["pulse_tail"])})
     for scene, shape, sign, A, W in plan["fracture_cases"]:
         jobs.append({"kind": "fracture", "scene": scene, "engines": names,
                      "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
                                 "A": float(A), "W": float(W)},
-                     "duration": _pulse_duration(scene, A, W, shape, plan["pulse_tail"])})
+                     "duration": pulse_run_length(W, _p(scene), plan["pulse_tail"])})
     for scene in plan["scenes"]:
         jobs.append({"kind": "free", "scene": scene, "engines": names, "motion": None,
                      "phi0_over_alpha": plan["free_phi0"], "duration": plan["free_duration"]})
     return _comparisons(jobs, cache=c["cache"], desc="comparisons", **c["run"])
+
+
+def _p(scene: Any) -> float:
+    """p [rad/s] of a plan's scene (a name, a path or a Scene): a pulse case's run length."""
+    from ..scene import load_scene
+
+    return load_scene(scene).p
 
 
 def _mirror_symmetric(scene: Any) -> bool:
@@ -64,7 +72,7 @@ def _part_speed(c: dict[str, Any]) -> list[dict[str, Any]]:
     """3: speed against accuracy (every engine through the plan's time steps)."""
     plan = c["plan"]
     dc = plan["dt_case"]
-    dur = _pulse_duration(dc["scene"], dc["A"], dc["W"], dc["shape"], plan["dt_tail"])
+    dur = pulse_run_length(dc["W"], _p(dc["scene"]), plan["dt_tail"])
     jobs = [{"kind": "dt", "scene": dc["scene"], "engine": e, "dt": float(dt),
              "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")}},
              "duration": dur}
@@ -218,8 +226,7 @@ def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list
         if plan["record_tail"] is not None or cap is not None:
             from ..scene.records import load_record
             r = load_record(rec["path"], dt=rec["dt"], units=rec["units"])
-            tail = plan["record_tail"] if plan["record_tail"] is not None else 10.0
-            rec_duration = float(r.t_end - r.t_start + tail)
+            rec_duration = run_length(r, plan["record_tail"])
             if cap is not None:
                 rec_duration = min(rec_duration, float(cap))
         durations[rec["path"]] = rec_duration

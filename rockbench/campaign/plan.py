@@ -86,6 +86,7 @@ def _thresholds(scene, W: float) -> float:
 def _fracture_case(ref: str, scene) -> tuple | None:
     """(scene, shape, sign, A, W) of the smallest A at which the analytic model fractures the
     scene's devices under an antisymmetric + pulse at W = 3, or None."""
+    from ..run_length import run_length
     from ..runner import run
     from ..scene.motion import RickerPulse
 
@@ -95,7 +96,7 @@ def _fracture_case(ref: str, scene) -> tuple | None:
     A = 1.0
     while A <= 60.0:
         p = RickerPulse.dimensionless(A, 3.0, scene.structure, "antisymmetric", 1)
-        r = run(scene, p, duration=round(6 * p.period + 3.0, 3), method="compiled")
+        r = run(scene, p, duration=round(run_length(p, 3.0), 3), method="compiled")
         if r.summary.fractured:
             return (ref, "antisymmetric", 1, round(A, 3), 3.0)
         A *= 1.25

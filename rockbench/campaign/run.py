@@ -15,7 +15,7 @@ table):
 3. **Overturning map** - :data:`MAP_SCENE` under positive symmetric pulses on the coarse grid
    :data:`MAP_A` x :data:`MAP_W`, every backend (via :func:`rockbench.sweep.run_cases`): where
    an engine's verdict differs from the analytic one.
-4. **Speed against accuracy** - one pulse case per engine at the time steps :data:`DT_SWEEP`:
+4. **Speed against accuracy** - one pulse case per engine at the plan's time steps (``dt_sweep``):
    nrmse and peak error against the real-time factor.
    **Fracture cases** - hybrid frames under the pulses of ``fracture_cases`` where the
    analytic model fractures the tendons (one survives, two overturn): whether each engine
@@ -57,17 +57,6 @@ __all__ = ["CAMPAIGN_COLUMNS", "CampaignTables", "campaign_plan", "code_fingerpr
            "find_records", "measure_campaign", "run_campaign", "write_tables"]
 
 code_fingerprint = S.code_fingerprint
-
-
-def _pulse_duration(scene_name: str, A: float, W: float, shape: str, tail: float | None):
-    """Duration [s] of a pulse run of the campaign: :func:`rockbench.studies.maps.cell_duration`
-    (the pulse window 6 T_g plus ``tail``; None: the package default)."""
-    if tail is None:
-        return None
-    from ..scene import load_scene
-    from ..studies.maps import cell_duration
-
-    return cell_duration(load_scene(scene_name), W, tail)
 
 
 # ==========================================================================================
@@ -387,7 +376,7 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
     else:
         plan = campaign_plan(quick)
     paper = plan["scenes"] == campaign_plan(quick)["scenes"]
-    store_dir = Path(store) if store is not None else out / "store"
+    store_dir = Path(store) if store is not None else S.default_store(out)
     fingerprint = code_fingerprint()
     cache = S.store_path(store_dir, "comparisons")
     notes: list[str] = []

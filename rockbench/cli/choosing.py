@@ -11,9 +11,10 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..constants import DT_LADDER
 from ..errors import ParameterError
 
-from .common import engine_names, engine_settings, load_scene_from
+from .common import engine_names, load_scene_from
 
 __all__ = ["add_choosing_commands", "cmd_tradeoff", "cmd_advise", "cmd_stress"]
 
@@ -39,7 +40,7 @@ def add_choosing_commands(sub) -> None:
     add_scene_options(p)
     add_engine_option(p, "every available one")
     p.add_argument("--dt", type=_dts, metavar="S,S,...",
-                   help="time steps [s] (default 4e-3,2e-3,1e-3,5e-4,2.5e-4,1e-4)")
+                   help=f"time steps [s] (default {','.join(f'{d:g}' for d in DT_LADDER)})")
     p.add_argument("--setting", dest="settings", metavar="ENGINE.KEY=VALUE[,...]",
                    action="append", default=[],
                    help="an extra setting swept at every dt, e.g. pymunk.iterations=60 (one "
@@ -90,26 +91,15 @@ def add_choosing_commands(sub) -> None:
     add_quiet_option(p)
 
 
-def _swept_settings(texts: list[str], engines: list[str]) -> list[dict[str, Any]]:
+def _swept_settings(texts: list[str], engines: list[str]) -> list:
     """tradeoff's ``--setting`` values, each one extra setting swept at every dt: one engine's
-    ``ENGINE.KEY=VALUE`` fields, comma-separated, in the one grammar; validated here (a bad
-    key or value exits 2 before anything runs) -> dicts with the engine under ``__engine__``
+    ``ENGINE.KEY=VALUE`` fields, comma-separated, in the one grammar
+    (:func:`rockbench.engines.setting_text.parse_overrides`); typed and validated here (a bad
+    key or value exits 2 before anything runs) -> one ``Overrides`` each
     (:func:`rockbench.studies.tradeoff.settings_grid`)."""
-    out = []
-    for text in texts:
-        parts = [t.strip() for t in text.split(",") if t.strip()]
-        head = parts[0].split("=", 1)[0] if parts else ""
-        if "." in head:        # later bare fields belong to the first one's engine
-            eng = head.split(".", 1)[0]
-            parts = [parts[0], *(p if "." in p.split("=", 1)[0] else f"{eng}.{p}"
-                                 for p in parts[1:])]
-        over = engine_settings(parts, engines, option="--setting")
-        if len(over) != 1:
-            raise ParameterError("--setting", text, "fields of one engine (ENGINE.KEY=VALUE,"
-                                 "ENGINE.KEY=VALUE); repeat --setting for another engine")
-        (engine, fields), = over.items()
-        out.append({"__engine__": engine, **fields})
-    return out
+    from ..engines.setting_text import parse_overrides
+
+    return [parse_overrides(text, engines, option="--setting") for text in texts]
 
 
 def _executor(args: argparse.Namespace) -> dict[str, Any]:

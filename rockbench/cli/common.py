@@ -25,8 +25,8 @@ from ..errors import ParameterError, RecordError, RockbenchError, RockbenchWarni
 __all__ = ["CommandLineError", "Parser", "add_setting_option", "add_engine_option",
            "add_quiet_option", "add_scene_options", "add_motion_options", "add_run_options",
            "arg_number", "arg_positive", "arg_nonzero", "arg_count", "arg_sign", "arg_key_value",
-           "arg_names", "MissingOption", "scene_overrides", "load_scene_from", "setting_value",
-           "parse_settings", "engine_settings", "backend_overrides", "motion_from",
+           "arg_names", "MissingOption", "scene_overrides", "load_scene_from",
+           "engine_settings", "backend_overrides", "motion_from",
            "engine_names", "print_json", "output_folder", "write_atomic", "pandas_display"]
 
 
@@ -159,7 +159,7 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
 
 def add_setting_option(p: argparse.ArgumentParser, what: str = "set") -> None:
     """``--setting ENGINE.KEY=VALUE`` (repeatable): the one settings grammar of every command
-    (:func:`rockbench.cli.common.parse_settings`)."""
+    (:mod:`rockbench.engines.setting_text`)."""
     p.add_argument("--setting", dest="settings", metavar="ENGINE.KEY=VALUE", action="append",
                    default=[], help=f"{what} a field of an engine's Settings, e.g. "
                    "pymunk.iterations=20 (bare KEY=VALUE when one engine is selected); "
@@ -212,91 +212,23 @@ def load_scene_from(args: argparse.Namespace):
     return load_scene(args.scene, scene_overrides(args.overrides))
 
 
-def setting_value(cls: type, name: str, raw: str, shown: str | None = None) -> Any:
-    """Parse ``raw`` as the type of the Settings field ``name`` (from its default value);
-    errors name ``shown`` (default ``--setting NAME``)."""
-    shown = shown or f"--setting {name}"
-    fields = {f.name: f for f in dataclasses.fields(cls)}
-    if name not in fields:
-        raise ParameterError(shown, raw, f"a field of {cls.__qualname__}: {', '.join(fields)}")
-    f = fields[name]
-    default = f.default if f.default is not dataclasses.MISSING else None
-    low = raw.lower()
-    try:
-        if isinstance(default, bool):
-            if low in ("true", "yes", "1", "on"):
-                return True
-            if low in ("false", "no", "0", "off"):
-                return False
-            raise ValueError
-        if isinstance(default, int):
-            return int(raw)
-        if isinstance(default, float):
-            return float(raw)
-        if isinstance(default, str):
-            return raw
-        if low in ("none", "null"):
-            return None
-        try:
-            return float(raw)
-        except ValueError:
-            return raw
-    except ValueError:
-        kind = type(default).__name__
-        raise ParameterError(shown, raw, f"a value of type {kind}") from None
-
-
 def _settings_class(engine: str):
     from ..engines import get_backend
 
     return get_backend(engine).Settings
 
 
-def parse_settings(texts: list[str], engines: list[str], *, option: str = "--setting",
-                   also: tuple[str, ...] = ()) -> list[tuple[str, str, str]]:
-    """The one ``--setting`` grammar: each text is ``ENGINE.KEY=VALUE`` (or a bare
-    ``KEY=VALUE`` when exactly one engine is selected: ``engines`` has one name) ->
-    ``[(engine, key, raw value), ...]``. ``ENGINE`` must be one of ``engines`` or ``also`` (e.g.
-    the analytic reference of ``compare``), ``KEY`` a field of its Settings; errors are
-    :class:`ParameterError` lines showing the right form."""
-    from ..engines import REGISTRY
-
-    selectable = list(dict.fromkeys([*engines, *also]))
-    out = []
-    for text in texts:
-        key, sep, raw = text.partition("=")
-        key, raw = key.strip(), raw.strip()
-        if not sep or not key:
-            raise ParameterError(option, text, "ENGINE.KEY=VALUE (e.g. pymunk.iterations=20)")
-        head, dot, field = key.partition(".")
-        if dot and head in REGISTRY:
-            engine = head
-            if engine not in selectable:
-                raise ParameterError(option, text, f"a setting of a selected engine: "
-                                     f"{', '.join(selectable)}")
-        elif dot:
-            raise ParameterError(option, text, f"ENGINE.KEY=VALUE with ENGINE one of "
-                                 f"{', '.join(REGISTRY)}")
-        elif len(engines) == 1:
-            engine, field = engines[0], key
-        else:
-            example = f"{engines[0]}.{key}={raw}" if engines else f"ENGINE.{key}={raw}"
-            raise ParameterError(option, text, f"ENGINE.KEY=VALUE naming one of the selected "
-                                 f"engines ({', '.join(selectable) or 'none'}), e.g. {option} "
-                                 f"{example}")
-        out.append((engine, field, raw))
-    return out
-
-
 def engine_settings(texts: list[str], engines: list[str], *, dt: float | None = None,
                     also: tuple[str, ...] = (), option: str = "--setting"
                     ) -> dict[str, dict[str, Any]]:
     """Validated Settings overrides {engine: {field: value}} from ``--setting`` texts (the
-    grammar of :func:`parse_settings`) and ``--dt`` (every selected engine with a time step;
+    grammar of :mod:`rockbench.engines.setting_text`) and ``--dt`` (every selected engine with a time step;
     an error if none has one). Each engine's Settings is built once here, so a bad key or value
     is refused before anything runs."""
     selectable = list(dict.fromkeys([*engines, *also]))
     out: dict[str, dict[str, Any]] = {}
+    from ..engines.setting_text import parse_settings, setting_value
+
     for engine, field, raw in parse_settings(texts, engines, option=option, also=also):
         cls = _settings_class(engine)
         over = out.setdefault(engine, {})

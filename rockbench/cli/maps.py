@@ -256,7 +256,9 @@ def cmd_map(args: argparse.Namespace) -> int:
         return 0
     if not args.scene:
         raise ParameterError("SCENE", None, "a scene name or .toml path (or --compare A B)")
+    from ..engines.setting_text import split_field
     from ..studies.maps import check_vertical_ratio
+    from ..sweep.map_store import map_store_path
     from .common import scene_overrides as _overrides
 
     vertical = check_vertical_ratio(args.vertical, "--vertical")
@@ -264,16 +266,15 @@ def cmd_map(args: argparse.Namespace) -> int:
     scene_overrides = _overrides(args.overrides) if args.overrides else None
     method, texts = None, []
     for text in args.settings:         # the map's own analytic choice: method=compiled|solve_ivp
-        key, _, raw = text.partition("=")
-        if args.engine == "analytic" and key.strip() in ("method", "analytic.method"):
-            method = raw.strip()
+        engine, key, raw = split_field(text)
+        if args.engine == "analytic" and key == "method" and engine in (None, "analytic"):
+            method = raw
         else:
             texts.append(text)
     settings = backend_overrides(args.engine, argparse.Namespace(settings=texts, dt=None))
     # the default store of a vertical map is its own (a horizontal one is not refused)
-    suffix = f"_vertical{vertical:g}" if vertical else ""
-    store = args.store or str(Path("maps") /
-                              f"{Path(args.scene).stem}_{args.engine}{suffix}.parquet")
+    tags = [f"vertical{vertical:g}"] if vertical else []
+    store = args.store or str(map_store_path("maps", Path(args.scene).stem, args.engine, *tags))
     if not args.store:
         _set_aside_other_code(Path(store), quiet=args.quiet)
     df = run_map(args.scene, args.engine, grid=args.grid, amplitude=args.amplitude,

@@ -76,6 +76,7 @@ def _figure(fig, path: Path) -> None:
 def cmd_validity_map(args: argparse.Namespace) -> int:
     from ..progress import enabled
     from ..studies.validity_map import default_axes, engines_to_run, validity_map
+    from ..sweep.store import default_store
     from ..report.validity_figures import plot_validity_map, validity_sentences
     from ..validity import friction_of
 
@@ -90,7 +91,7 @@ def cmd_validity_map(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None:
         output_folder(out / "validity_map.csv", "--out")
-    store = args.store or (out / "store" if out is not None else None)
+    store = args.store or (default_store(out) if out is not None else None)
     scene = load_scene_from(args)
     engines = engine_names(args)
     if engines is not None and "analytic" in engines:

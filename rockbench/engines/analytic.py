@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import ClassVar
 
 import scipy
@@ -10,8 +9,9 @@ import scipy
 from ..analytic.reference import reference_of
 from ..analytic.solver import AnalyticSettings, simulate
 from .._jit import CpuClock
-from ..constants import FALL_EXTENSION
+from ..errors import ParameterError
 from ..result import Result
+from ..verdict import fall_under_way, finish_fall
 from .base import Backend, run_window
 
 __all__ = ["AnalyticBackend"]
@@ -28,13 +28,20 @@ class AnalyticBackend(Backend):
     def _probe(cls) -> tuple[bool, str]:
         return True, f"scipy {scipy.__version__}"
 
-    def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
-        """Integrate from ``phi0`` [rad] for ``duration`` [s] (default: the motion + 10 s).
+    def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0,
+            keep: str = "all") -> Result:
+        """Integrate from ``phi0`` [rad] for ``duration`` [s] (default:
+        :func:`rockbench.run_length.run_length`, the motion + 10 s). ``keep``: "all" only (the
+        reference keeps its whole Result: every metric is measured against its history).
 
-        A run that ends after the ground motion past its critical angle, not yet fallen, is
-        integrated :data:`~rockbench.constants.FALL_EXTENSION` seconds longer: if it falls, the
-        longer run is returned (its history ends at the fall, after ``duration``), so that the
-        reference and the engines' collapse rule give one verdict (``docs/conventions.md``)."""
+        A run that ends after the ground motion with its fall under way (past its critical
+        angle, not yet fallen) is finished by :func:`rockbench.verdict.finish_fall`: run
+        :data:`~rockbench.constants.FALL_EXTENSION` seconds longer, the longer run is returned
+        if it falls (its history ends at the fall, after ``duration``), so that the reference
+        and the engines' collapse rule give one verdict (``docs/conventions.md``)."""
+        if keep != "all":
+            raise ParameterError("keep", keep, "'all' for the analytic reference (its whole "
+                                               "Result)")
         t0, t_end = run_window(self.scene, motion, duration, phi0, settings=self.settings)
         with CpuClock() as clock:
             if _compiled_path(self.settings.method, motion):   # the numba path (maps, records)
@@ -44,31 +51,27 @@ class AnalyticBackend(Backend):
             ref = reference_of(self.scene)
             result = integrate(self.scene, motion, duration=t_end - t0, phi0=phi0,
                                settings=self.settings, reference=ref)
-            if _fall_under_way(result, ref, motion, t_end):
-                # the run ended after the ground motion past the critical angle: the fall is
-                # finished (one verdict rule for every backend, docs/conventions.md)
-                longer = integrate(self.scene, motion, duration=t_end - t0 + FALL_EXTENSION,
-                                   phi0=phi0, settings=self.settings, reference=ref)
-                if longer.summary.overturned:
-                    result = longer
+            # a fall under way at the end is finished (rockbench.verdict: one rule for every
+            # backend, docs/conventions.md)
+            (result,), _ = finish_fall(
+                [result], [_fall_under_way(result, ref, motion, t_end)],
+                lambda _, extension: [integrate(self.scene, motion,
+                                                duration=t_end - t0 + extension, phi0=phi0,
+                                                settings=self.settings, reference=ref)],
+                fell=lambda r: r.summary.overturned)
         result.cost.cpu_s, result.cost.compile_cpu_s = clock.cpu_s, clock.compile_s
         return result
 
 
 def _fall_under_way(result: Result, ref, motion, t_end: float) -> bool:
-    """Whether an ok run that did not overturn ended at or after the end of the ground motion
-    (``t_end`` [s]; free rocking has none) with |phi| past the critical angle of its direction
-    and device state: nothing can bring it back, it is falling."""
-    s = result.summary
-    if s.status != "ok" or s.overturned or not s.exceeded_critical or result.history.empty:
+    """:func:`rockbench.verdict.fall_under_way` of a run that ends at ``t_end`` [s], read on
+    its last history sample."""
+    if result.history.empty:
         return False
-    if motion is not None and t_end < float(motion.t_end):
-        return False                   # the ground may still bring it back: undecided
-    last = result.history.iloc[-1]
-    phi = float(last["phi"])
-    side = 1 if phi > 0 else -1
-    crit = ref.critical[(side, bool(last["devices_intact"]))]
-    return math.isfinite(crit) and side * phi > crit
+    s, last = result.summary, result.history.iloc[-1]
+    return fall_under_way(s.status, s.overturned, float(last["phi"]),
+                          bool(last["devices_intact"]), ref.critical,
+                          motion_over=motion is None or t_end >= float(motion.t_end))
 
 
 def _compiled_path(method: str, motion) -> bool:

@@ -1,100 +1,16 @@
-"""The backend contract: what a new backend must implement (in the spirit of
-``scipy.integrate.OdeSolver``).
+"""The backend contract, in the spirit of ``scipy.integrate.OdeSolver``: :class:`Backend` is
+what every backend is (the analytic reference and the engines), :class:`EngineBackend` what a
+rigid-body engine stepped from Python is. Their docstrings are the checklists an adapter's
+author follows: what to declare, what to implement, what the harness then gives.
 
-A backend is a subclass of :class:`Backend` registered by name in :mod:`rockbench.engines`
-(``REGISTRY``: one file + one line). It provides
-
-* ``name`` - the registry name (class attribute);
-* ``Settings`` - a frozen dataclass of its own settings (time step, solver iterations, contact
-  parameters, ...), every field with a default that ``docs/engines/<name>.md`` justifies by a
-  measurement; invalid values raise :class:`rockbench.errors.ParameterError` in
-  ``__post_init__``. A backend never changes the scene: engine-only parameters live here;
-* ``package`` - the distribution that provides the engine (class attribute; default the
-  registry name, e.g. "openseespy" for "opensees"), for ``rockbench engines``;
-* capabilities (class attributes with defaults on :class:`Backend`, read by sweeps and
-  campaigns through ``rockbench.engines.get_backend(name)``, so that no module outside
-  ``engines/`` names an engine):
-
-  - ``batched`` (default False) - the backend runs many ground motions of one scene in one
-    call: it then implements the classmethods ``run_batch(scene, motions, *, duration,
-    nthread, keep, **settings) -> list[Result]`` and ``batch_refusal(scene, settings) -> str |
-    None`` (why a scene cannot run batched; callers then use ``run`` case by case);
-  - ``fast`` (default False) - real-time factor >= 20 through rockbench on the benchmark cases
-    (``benchmarks/results/results.md``): the report gives such engines the larger default map
-    grids;
-  - ``relative_cost`` (default 1.0) - CPU cost of a run relative to the fast engines, for the
-    order in which campaigns schedule jobs (longest first) and searches try engines (cheapest
-    first); from the ``total_s`` column of ``benchmarks/results/results.md``;
-  - ``contact_variants`` (default none) - the contact settings a search may try besides the
-    defaults (``rockbench advise --full``): a tuple of override mappings of ``Settings``
-    fields, each one a variant (those that decide the impact and small uplifts);
-  - ``precision_sweeps`` (default: the time step) - the work-precision curves: a tuple of
-    (knob, values coarse to fine or None for the sweep's time steps, overrides held along it);
-    an error-controlled integrator declares its own knob (e.g. an accuracy);
-  - ``vertical_motion`` (default False; True for every :class:`EngineBackend`) - the backend
-    moves its ground vertically too: a motion's ``vertical`` component (a GroundMotion of the
-    vertical ground acceleration [m/s^2], positive up, or None) enters its run. A backend
-    without it refuses such a motion in one line (:func:`check_vertical`), never ignores it;
-
-* ``_probe()`` - classmethod returning ``(True, version)`` or ``(False, why)``: whether the
-  engine imports here (it may raise: an exception is a ``(False, why)``). Callers never call it:
-  they ask ``available()``, which the base class implements once and which runs the probe
-  **once per process** (a cached fact: every table and report of one process sees the same
-  engines), and ``remedy(why)`` (default: ``pip install 'rockbench[<name>]'``; an adapter whose
-  engine needs a system library says which);
-* ``run(motion=None, *, duration=None, phi0=0.0) -> Result`` - one simulation of the scene it
-  was constructed with, returning a :class:`rockbench.result.Result` whose ``history`` has every
-  column of :data:`~rockbench.result.HISTORY_COLUMNS` (and, for engines,
-  :data:`~rockbench.result.CONTACT_COLUMNS`) sampled every ``settings.output_dt`` seconds on
-  :func:`~rockbench.result.output_grid`, whose ``phi`` is the rotation of the left column's body
-  from rest (positive counterclockwise), and whose failures are reported, not raised: an engine
-  error, NaN, or an unphysical state yields a Result with ``summary.status == "diverged"`` and
-  the reason.
-
-Rigid-body engines subclass :class:`EngineBackend`, whose ``run`` is written once
-(:mod:`rockbench.engines.loop`). An adapter then implements four primitives:
-
-``_build(self)``
-    Create the world from ``self.specs`` (:class:`~rockbench.engines.bodies.BodySpec`: true
-    mass, inertia about the centre of mass, box half sizes, rest centre of mass, in the order
-    [block] or [left column, beam, right column]), ``self.foundation``
-    (:class:`~rockbench.engines.bodies.FoundationSpec`: ground and optional step) and
-    ``self.poses0`` (initial poses on the exact mechanism), with contacts of friction
-    :attr:`EngineBackend.friction_pairs` (every base pair exactly the first coefficient, every
-    beam-on-column pair the second, whatever the engine's rule of combining two bodies'
-    coefficients: :func:`~rockbench.engines.contacts.body_frictions`) and no restitution. Planar engines stay planar; 3-D engines keep
-    the bodies in the x-y plane with joints (not free bodies). Build native tendons/dampers only
-    if ``native_devices`` is True and ``self.scene.has_devices``: a free-standing scene has no
-    device elements.
-``_step(self, gravity_x, forces, gravity_y=-g)``
-    Advance the world by ``settings.dt`` with gravity ``(gravity_x, gravity_y)`` [m/s^2]: the
-    ground motion as a time-varying gravity vector, ``(-u_g''(t), -(g + u_v''(t)))`` with
-    u_v'' the vertical ground acceleration (positive up), exact for rigid bodies in the
-    foundation's frame (the bodies' poses are relative to the moving ground; the loop passes
-    ``gravity_y`` only when the motion has a vertical component), and the given
-    :class:`~rockbench.engines.devices.PointForce` list (device forces computed by the loop
-    from the poses; empty for a free-standing scene) applied during the step.
-``_state(self) -> ndarray (n_bodies, 6)``
-    A new float array (the loop keeps it) of x, y [m], theta [rad] (rotation from rest, continuous, + counterclockwise), vx, vy [m/s],
-    omega [rad/s] of each body's centre of mass, in the order of ``self.specs``.
-``_close(self)``
-    Release engine resources (physics clients, ...).
-
-and optionally ``_remove_devices(self)`` (native devices: switch them off at fracture) and
-``_native_device_report(self, devices, state, elongations)`` (native devices: the tendon
-tensions and damper forces [N] the engine applies, for the history). A ``damper`` field in the
-adapter's Settings, if present and one of :data:`~rockbench.engines.devices.DAMPER_MODELS`,
-selects how the shared damper forces reach the bodies.
-
-Counters the base keeps: ``steps`` (engine steps), ``wall_s`` (seconds inside ``_step``,
-building and the Python loop excluded); attributes ``specs``, ``foundation``, ``poses0`` (set
-before ``_build``). :meth:`EngineBackend.build` builds the world outside a run (inspection,
-tests, batched paths).
-
-Shared machinery lives beside this file, one job each: ``bodies.py`` (scene -> bodies),
-``devices.py`` (tendons and dampers from poses), ``contacts.py`` (penetration, sliding,
-opening), ``loop.py`` (stepping, and samples -> Result); :mod:`rockbench.measure` measures
-events and the effective eta from the sampled history.
+Beside them, what every backend shares: :func:`run_window` (a run's time window, validated
+once), :func:`check_vertical` (a vertical motion refused by a backend that cannot move its
+ground vertically), :func:`resolve_friction` (the scene's friction in an engine's settings)
+and :class:`EngineSettings` (the settings every engine has). The shared machinery of the
+engines lives beside this file, one job each: ``bodies.py`` (scene -> bodies), ``devices.py``
+(tendons and dampers from poses), ``contacts.py`` (penetration, sliding, opening),
+``loop.py`` (stepping, and samples -> Result), ``verdicts.py`` (what the samples say);
+:mod:`rockbench.measure` measures events and the effective eta from the sampled history.
 """
 
 from __future__ import annotations
@@ -109,6 +25,7 @@ import numpy as np
 from ..constants import G
 from ..errors import BackendUnavailable, ParameterError, check_positive
 from ..result import Result
+from ..run_length import describe, run_length
 from ..scene.scene import Scene
 from .bodies import body_specs, foundation_spec, initial_poses
 from .devices import DeviceGeometry, PointForce
@@ -122,18 +39,100 @@ _STATUS_LOCK = threading.RLock()
 
 
 class Backend(abc.ABC):
-    """Base class of every backend (analytic and engines). See the module docstring."""
+    """Base class of every backend (the analytic reference and the engines).
+
+    To add a backend, follow these steps (scipy's ``OdeSolver`` asks the same of a solver):
+
+    1. **Subclass** :class:`Backend` in one file - a rigid-body engine stepped from Python
+       subclasses :class:`EngineBackend` instead, whose checklist follows this one - and
+       register it by name: one line in ``rockbench/registry.py`` (``REGISTRY``), or an entry
+       point of the group ``rockbench.engines`` in your own distribution.
+
+    2. **Declare** (class attributes; those with a default here may be left out):
+
+       - ``name`` - the registry name;
+       - ``Settings`` - a frozen dataclass of the backend's own settings (time step, solver
+         iterations, contact parameters, ...), every field with a default that
+         ``docs/engines/<name>.md`` justifies by a measurement; invalid values raise
+         :class:`rockbench.errors.ParameterError` in ``__post_init__``. A backend never
+         changes the scene: engine-only parameters live here. A setting typed as text
+         (``--setting ENGINE.KEY=VALUE``) takes the type of its field's default
+         (:mod:`rockbench.engines.setting_text`);
+       - ``package`` (default "": the registry name) - the distribution that provides the
+         engine (e.g. "openseespy"), for ``rockbench engines`` and the engine versions read
+         from package metadata;
+       - its capabilities, read by sweeps, campaigns and searches through
+         ``rockbench.engines.get_backend(name)``, so that no module outside ``engines/``
+         names an engine:
+
+         * ``batched`` (default False) - it runs many ground motions of one scene in one call:
+           it then implements the classmethods ``run_batch(scene, motions, *, duration,
+           nthread, keep, **settings) -> list[Result]`` and ``batch_refusal(scene, settings)
+           -> str | None`` (why a scene cannot run batched; callers then use ``run`` case by
+           case);
+         * ``fast`` (default False) - real-time factor >= 20 through rockbench on the
+           benchmark cases (``benchmarks/results/results.md``): the report gives such engines
+           the larger default map grids;
+         * ``relative_cost`` (default 1.0) - CPU cost of a run relative to the fast engines:
+           the order in which campaigns schedule jobs (longest first) and searches try
+           engines (cheapest first); from the ``total_s`` column of
+           ``benchmarks/results/results.md``;
+         * ``contact_variants`` (default none) - the contact settings a search may try besides
+           the defaults (``rockbench advise --full``): a tuple of override mappings of
+           ``Settings`` fields, each one a variant;
+         * ``precision_sweeps`` (default ``(("dt", None, {}),)``: the time step) - the
+           work-precision curves: a tuple of (knob, values coarse to fine or None for the
+           sweep's time steps, the dt ladder :data:`rockbench.constants.DT_LADDER`,
+           overrides held along it); an error-controlled integrator declares its own knob
+           (e.g. an accuracy);
+         * ``vertical_motion`` (default False; True for every :class:`EngineBackend`) - it
+           moves its ground vertically too: a motion's ``vertical`` component (a GroundMotion
+           of the vertical ground acceleration [m/s^2], positive up, or None) enters its run.
+           A backend without it refuses such a motion in one line (:func:`check_vertical`),
+           never ignores it.
+
+    3. **Implement**:
+
+       - ``_probe()`` - classmethod returning ``(True, version)`` or ``(False, why)``: whether
+         the engine imports here (it may raise: an exception is a ``(False, why)``);
+       - ``run(motion=None, *, duration=None, phi0=0.0, keep="all") -> Result`` - one
+         simulation of the scene the backend was constructed with: start with
+         :func:`run_window` (the window of every backend: from the motion's start, for
+         ``duration`` or the run length of :func:`rockbench.run_length.run_length`), return
+         a :class:`rockbench.result.Result` whose ``history`` has every column of
+         :data:`~rockbench.result.HISTORY_COLUMNS` (and, for engines,
+         :data:`~rockbench.result.CONTACT_COLUMNS`) sampled every ``settings.output_dt``
+         seconds on :func:`~rockbench.result.output_grid`, whose ``phi`` is the rotation of
+         the left column's body from rest (positive counterclockwise), whose verdict follows
+         the rule of every backend (:mod:`rockbench.verdict`: a fall under way at the end is
+         finished) and whose failures are reported, not raised: an engine error, NaN, or an
+         unphysical state yields a Result with ``summary.status == "diverged"`` and the
+         reason. ``keep="summary"``: only what a map keeps (the engines' ``Outcome``: the same
+         summary and cost, no history); a backend with nothing lighter refuses it;
+       - optionally ``remedy(why)`` - what makes the backend available (default:
+         ``pip install 'rockbench[<name>]'``; an adapter whose engine needs a system library
+         says which).
+
+    4. **What the harness then gives**, with no other edit: ``available()``, which runs the
+       probe **once per process** (a cached fact: every table and report of one process sees
+       the same engines; callers never call ``_probe``); ``version()``; settings built and
+       validated from overrides, with the scene's friction (:func:`resolve_friction`);
+       ``rockbench.run`` / ``compare`` / ``map`` / ``tradeoff`` / ``advise`` / ``stress`` /
+       ``fragility`` and the report; ``rockbench.testing.check_backend(name)``, the contract's
+       checks run on it; and the pytest plugin.
+    """
 
     name: ClassVar[str]
     Settings: ClassVar[type]
-    #: Capabilities (module docstring): batched runs, speed class, relative cost of a run.
+    #: Capabilities (the class docstring, step 2): batched runs, speed class, relative cost,
+    #: contact variants, work-precision curves, vertical ground motion.
     batched: ClassVar[bool] = False
     fast: ClassVar[bool] = False
     relative_cost: ClassVar[float] = 1.0
     contact_variants: ClassVar[tuple[dict[str, Any], ...]] = ()
     precision_sweeps: ClassVar[tuple] = (("dt", None, {}),)
     vertical_motion: ClassVar[bool] = False
-    #: The distribution that provides the engine (``rockbench engines``; metadata versions).
+    #: The distribution that provides the engine ("": the registry name).
     package: ClassVar[str] = ""
 
     def __init__(self, scene: Scene, settings: Any = None, **overrides: Any):
@@ -179,8 +178,11 @@ class Backend(abc.ABC):
         return f"pip install 'rockbench[{cls.name}]'"
 
     @abc.abstractmethod
-    def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0) -> Result:
-        """Simulate the scene under ``motion`` (None: free rocking from ``phi0`` [rad])."""
+    def run(self, motion=None, *, duration: float | None = None, phi0: float = 0.0,
+            keep: str = "all") -> Result:
+        """Simulate the scene under ``motion`` (None: free rocking from ``phi0`` [rad]) for
+        ``duration`` [s] (None: :func:`rockbench.run_length.run_length`); ``keep``: "all"
+        (the Result) or "summary" (what a map keeps; class docstring, step 3)."""
 
     @classmethod
     def batch_refusal(cls, scene: Scene, settings: Any) -> str | None:
@@ -242,7 +244,7 @@ def check_vertical(backend: type, motion) -> None:
     False): a ParameterError naming the motion and the reason, never a run that ignores it."""
     if motion is None or getattr(motion, "vertical", None) is None:
         return
-    if not getattr(backend, "vertical_motion", False):
+    if not backend.vertical_motion:
         raise ParameterError("motion", motion.label() if hasattr(motion, "label") else motion,
                              "a motion without a vertical component for backend "
                              f"{backend.name!r}",
@@ -255,7 +257,8 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
 
     Shared by every backend so that they all start and stop at the same times: from the motion's
     ``t_start`` (-3 T_g for a Ricker pulse) or 0 for free rocking, for ``duration`` seconds
-    (default: the motion's length + 10 s, or 10 s of free rocking).
+    (default: :func:`rockbench.run_length.run_length`, the motion's length + 10 s, or 10 s of
+    free rocking).
 
     ``motion`` must be a :class:`~rockbench.scene.motion.GroundMotion` or None; ``phi0`` [rad]
     must be below the fall angle of its own direction (``scene.fall_angles[sign(phi0)]``).
@@ -264,7 +267,6 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
     engine steps = duration / ``settings.dt`` must be within the limits ``max_samples`` and
     ``max_steps`` of :mod:`rockbench.limits` (the error names the override).
     """
-    from ..constants import FREE_TAIL
     from ..errors import check_finite
     from ..limits import check_size
     from ..scene.motion import GroundMotion
@@ -276,7 +278,7 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
     t0 = float(motion.t_start) if motion is not None else 0.0
     given = duration is not None
     if duration is None:
-        duration = (max(motion.t_end - t0, 0.0) if motion is not None else 0.0) + FREE_TAIL
+        duration = run_length(motion)
     duration = check_positive("duration", duration)
     phi0 = check_finite("phi0", phi0)
     if phi0 != 0.0:
@@ -290,8 +292,8 @@ def run_window(scene: Scene, motion, duration: float | None, phi0: float, *,
     if motion is None and phi0 == 0.0:
         raise ParameterError("phi0", phi0, "non-zero for a free-rocking run (no ground motion)")
     if settings is not None:
-        shown: Any = duration if given else (f"{duration:g} s (the default: the motion's "
-                                             f"{duration - FREE_TAIL:g} s + {FREE_TAIL:g} s)")
+        shown: Any = duration if given else (f"{duration:g} s (the default: "
+                                             f"{describe('motion', motion=motion)})")
         output_dt = getattr(settings, "output_dt", None)
         if isinstance(output_dt, (int, float)) and output_dt > 0:
             n = duration / output_dt
@@ -366,12 +368,74 @@ class EngineSettings:
 
 
 class EngineBackend(Backend):
-    """A rigid-body engine stepped from Python. Subclasses implement the four primitives of the
-    module docstring; ``run`` is implemented once (:mod:`rockbench.engines.loop`)."""
+    """A rigid-body engine stepped from Python: ``run`` is written once
+    (:mod:`rockbench.engines.loop`), the adapter supplies four primitives.
+
+    To add one, follow :class:`Backend`'s checklist with these steps in place of its steps 2-3:
+
+    1. **Declare** ``name``, ``package`` and the capabilities as for every backend, and a
+       ``Settings`` that subclasses :class:`EngineSettings` (dt, output_dt, friction and the
+       divergence tolerances every engine has) with the engine's own fields. An engine that
+       can build the devices as its own elements (tendons, dampers) declares a ``devices``
+       field ("native" | "forces"): :attr:`native_devices` reads it, no other declaration.
+       A ``damper`` field, if present and one of
+       :data:`~rockbench.engines.devices.DAMPER_MODELS`, selects how the shared damper forces
+       reach the bodies.
+
+    2. **Implement** the four primitives:
+
+       ``_build(self)``
+           Create the world from ``self.specs`` (:class:`~rockbench.engines.bodies.BodySpec`:
+           true mass, inertia about the centre of mass, box half sizes, rest centre of mass, in
+           the order [block] or [left column, beam, right column]), ``self.foundation``
+           (:class:`~rockbench.engines.bodies.FoundationSpec`: ground and optional step) and
+           ``self.poses0`` (initial poses on the exact mechanism), with contacts of friction
+           :attr:`friction_pairs` (every base pair exactly the first coefficient, every
+           beam-on-column pair the second, whatever the engine's rule of combining two bodies'
+           coefficients: :func:`~rockbench.engines.contacts.body_frictions`) and no
+           restitution. Planar engines stay planar; 3-D engines keep the bodies in the x-y
+           plane with joints (not free bodies). Build native tendons/dampers only if
+           :attr:`native_devices` and ``self.scene.has_devices``: a free-standing scene has no
+           device elements.
+       ``_step(self, gravity_x, forces, gravity_y=-g)``
+           Advance the world by ``settings.dt`` with gravity ``(gravity_x, gravity_y)``
+           [m/s^2]: the ground motion as a time-varying gravity vector,
+           ``(-u_g''(t), -(g + u_v''(t)))`` with u_v'' the vertical ground acceleration
+           (positive up), exact for rigid bodies in the foundation's frame (the bodies' poses
+           are relative to the moving ground; the loop passes ``gravity_y`` only when the
+           motion has a vertical component), and the given
+           :class:`~rockbench.engines.devices.PointForce` list (device forces computed by the
+           loop from the poses; empty for a free-standing scene) applied during the step.
+       ``_state(self) -> ndarray (n_bodies, 6)``
+           A new float array (the loop keeps it) of x, y [m], theta [rad] (rotation from rest,
+           continuous, + counterclockwise), vx, vy [m/s], omega [rad/s] of each body's centre
+           of mass, in the order of ``self.specs``.
+       ``_close(self)``
+           Release engine resources (physics clients, ...).
+
+       and, optionally, ``_remove_devices(self)`` (native devices: switch them off at
+       fracture), ``_native_device_report(self, devices, state, elongations)`` (native
+       devices: the tendon tensions and damper forces [N] the engine applies, for the history)
+       and ``_compiled_loop(self)`` (the whole stepping loop in compiled code, when the
+       engine's C step function can be called directly).
+
+    3. **What the harness then gives**, besides :class:`Backend`'s step 4: ``run`` (stepping,
+       the divergence checks, the verdict, events and the effective eta), ``build()`` (the
+       world outside a run: inspection, tests, batched paths), the counters ``steps`` (engine
+       steps) and ``wall_s`` (seconds inside ``_step``, building and the Python loop
+       excluded), and the attributes ``specs``, ``foundation``, ``poses0`` (set before
+       ``_build``).
+    """
 
     Settings: ClassVar[type] = EngineSettings
-    native_devices: ClassVar[bool] = False
     vertical_motion: ClassVar[bool] = True
+
+    @property
+    def native_devices(self) -> bool:
+        """Whether this run builds the scene's devices as the engine's own elements: the
+        adapter's ``devices`` setting is "native" (an adapter without that setting applies
+        the shared device forces, :mod:`rockbench.engines.devices`)."""
+        return getattr(self.settings, "devices", "forces") == "native"
 
     @property
     def friction_pairs(self) -> tuple[float, float]:

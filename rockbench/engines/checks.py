@@ -15,7 +15,7 @@ import numpy as np
 
 from ..constants import G
 from ..progress import sim_time
-from .verdicts import _falling
+from ..verdict import past_critical
 
 __all__ = ["Diverged", "SampleChecks", "falling_or_none"]
 
@@ -25,13 +25,10 @@ class Diverged(Exception):
 
 
 def falling_or_none(phi: np.ndarray, intact: np.ndarray, crit: dict) -> np.ndarray | None:
-    """:func:`~rockbench.engines.verdicts._falling` (the samples past their critical angle),
-    or None when none is: |phi| stays at or below every finite critical angle (the common
-    case, which then costs one reduction instead of four masks)."""
-    finite = [c for c in crit.values() if math.isfinite(c)]
-    if not finite or not phi.size or float(np.abs(phi).max()) <= min(finite):
-        return None
-    return _falling(phi, intact, crit)
+    """The mask of the samples past their critical angle (:func:`rockbench.verdict.past_critical`),
+    or None when none is (the common case)."""
+    falling = past_critical(phi, intact, crit)
+    return falling if falling.any() else None
 
 
 class SampleChecks:

@@ -46,11 +46,12 @@ from ..result import (CONTACT_COLUMNS, HISTORY_COLUMNS, Cost, Result, Summary, e
                       output_grid)
 from ..scene.scene import Scene
 from ..scene.structure import Frame
+from ..verdict import past_critical
 from .bodies import BodySpec
 from .checks import Diverged, SampleChecks, falling_or_none
 from .contacts import ContactProbe
 from .devices import DAMPER_MODELS, DeviceGeometry
-from .verdicts import (_collapse, _energy_floor, _exceeded, _frozen, _judge_stopped,
+from .verdicts import (_collapse, _energy_floor, _frozen, _judge_stopped,
                        _peak_energy_growth)
 
 __all__ = ["Stepped", "Outcome", "step_run", "finish", "SampleChecks", "device_geometry",
@@ -536,7 +537,7 @@ def finish(scene: Scene, motion, settings, specs: list[BodySpec], stepped: Stepp
     summary = Summary(
         max_abs_phi=max_abs, max_abs_phi_over_alpha=max_abs / alpha,
         overturned=overturned, t_overturn=t_over,
-        exceeded_critical=overturned or _exceeded(ph, crit, intact_b),
+        exceeded_critical=overturned or bool(past_critical(ph, intact_b, crit).any()),
         uplifted=uplifted, t_uplift=t_up,
         n_impacts=n_imp, fractured=stepped.fractured,
         t_fracture=stepped.t_fracture, status=status, reason=reason,

@@ -230,11 +230,6 @@ class MujocoBackend(EngineBackend):
 
         return run_batch(scene, motions, **kwargs)
 
-    @property
-    def native_devices(self) -> bool:  # type: ignore[override]
-        """True when the devices are MuJoCo elements (``settings.devices == "native"``)."""
-        return self.settings.devices == "native"
-
     @classmethod
     def _probe(cls) -> tuple[bool, str]:
         try:

@@ -222,11 +222,6 @@ class OpenseesBackend(EngineBackend):
         {"toe_stiffness": 1e11}, {"toe_stiffness": 1e12}, {"integrator": "hht", "hht_alpha": 0.9},
         {"damping": "stiffness"})
 
-    @property
-    def native_devices(self) -> bool:  # type: ignore[override]
-        """True when tendons and dampers are OpenSees elements (``devices == "native"``)."""
-        return self.settings.devices == "native"
-
     @classmethod
     def _probe(cls) -> tuple[bool, str]:
         try:

@@ -1,22 +1,22 @@
 """What an engine run's samples say beyond its own stepping (used by
-:func:`rockbench.engines.loop.finish` and the sample checks): the critical-angle masks and the
-collapse rule (the verdict rule of every backend), energy growth between peaks, what a run that
-stopped early still says (a fall finished by the analytic model from its last state, a peak
-and verdict that are final, or an unknown verdict), and whether a run that finished moved when
-it had to (``docs/errors.md``).
+:func:`rockbench.engines.loop.finish` and the sample checks), by the verdict rule of every
+backend (:mod:`rockbench.verdict`): the collapse rule, energy growth between peaks, what a run
+that stopped early still says (a fall finished by the analytic model from its last state, a
+peak and verdict that are final, or an unknown verdict), and whether a run that finished moved
+when it had to (``docs/errors.md``).
 
 Units: SI and radians.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
-from ..constants import FALL_EXTENSION, G
+from ..constants import G
 from ..scene.scene import Scene
+from ..verdict import finish_fall, past_critical
 
 
 def _energy_floor(ref) -> float:
@@ -32,9 +32,9 @@ def _judge_stopped(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray,
     verdict rule of every backend:
 
     * past its critical angle: the fall is finished with the analytic model from the engine's
-      last state (phi, phidot at t, under what is left of the ground motion), as the maps
-      finish a fall under way for the reference (``rockbench.studies.maps``): the verdict is the
-      model's from there, and the note says so;
+      last state (phi, phidot at t, under what is left of the ground motion;
+      :func:`rockbench.verdict.finish_fall`): the verdict is the model's from there, and the
+      note says so;
     * inside it, with the ground motion over and the mechanical energy left unable to lift
       |phi| past the peak measured (impacts and dampers only remove energy): the peak and the
       verdict (survived) measured before the divergence are final, and the note says so;
@@ -45,21 +45,24 @@ def _judge_stopped(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray,
     s = 1 if p > 0 else -1
     alpha = ref.alpha
     where = f"{p / alpha:.4g} alpha, phidot {pd:.3g} rad/s at t = {t_j:.4g} s"
-    if _falling(phi[j:], intact[j:], ref.critical)[0]:
+    if past_critical(p, on, ref.critical):
         from ..analytic.solver import simulate
 
         sc = scene if (on or not scene.has_devices) else scene.replace(devices=None)
         rest = _Remaining(motion, t_j) if motion is not None else None
-        long = (max(float(motion.t_end) - t_j, 0.0) if motion is not None else 0.0) \
-            + FALL_EXTENSION
+        remaining = max(float(motion.t_end) - t_j, 0.0) if motion is not None else 0.0
         try:
-            r = simulate(sc, rest, duration=long, phi0=p, phidot0=pd,
-                         reference=ref if sc is scene else None)
+            (r,), _ = finish_fall(
+                [None], [True],
+                lambda _, extension: [simulate(sc, rest, duration=remaining + extension,
+                                               phi0=p, phidot0=pd,
+                                               reference=ref if sc is scene else None)],
+                fell=lambda r: r.summary.overturned and r.summary.t_overturn is not None)
         except Exception as e:  # noqa: BLE001 - the verdict stays unknown
             return False, None, f"it stopped past its critical angle ({where}); finishing the " \
                                 f"fall with the analytic model failed ({type(e).__name__})"
         off = 0.0 if motion is not None else t_j
-        if r.summary.overturned and r.summary.t_overturn is not None:
+        if r is not None:                     # it fell
             t_o = float(r.summary.t_overturn) + off
             return True, t_o, (f"it diverged past its critical angle ({where}): finished with "
                                f"the analytic model from that state, it overturns at "
@@ -74,7 +77,7 @@ def _judge_stopped(scene: Scene, motion, ref, t: np.ndarray, phi: np.ndarray,
     peak = float(np.max(np.abs(phi)))
     left = dyn[s].energy(p, pd, on)
     bound = min(dyn[d].energy(d * peak, 0.0, on) for d in (1, -1))
-    if left <= bound and peak < min(ref.critical[(d, on)] for d in (1, -1)):
+    if left <= bound and not past_critical(np.array([peak, -peak]), on, ref.critical).any():
         return False, None, (f"it diverged after its peak ({where}): the ground motion was "
                              f"over and the energy left ({left:.4g} J) cannot lift |phi| past "
                              f"the peak measured ({peak / alpha:.4g} alpha, {bound:.4g} J): "
@@ -193,38 +196,11 @@ def _collapse(t: np.ndarray, phi: np.ndarray, intact: np.ndarray, crit: dict,
     the end of a run that ends after the ground motion (``t_quiet`` [s]): it has collapsed -
     come to rest on another body or on the ground before reaching the fall angle, which no
     rigid-impact model allows (past the critical angle, with no input, the potential only
-    falls). None when the run does not end that way."""
+    falls: :mod:`rockbench.verdict`). None when the run does not end that way."""
     if not t.size or t[-1] < t_quiet:
         return None
-    beyond = _falling(phi, intact, crit)
+    beyond = past_critical(phi, intact, crit)
     if not beyond[-1]:
         return None
     inside = np.flatnonzero(~beyond)
     return int(inside[-1] + 1) if inside.size else 0
-
-
-def _falling(phi: np.ndarray, intact: np.ndarray, crit: dict) -> np.ndarray:
-    """Mask of samples past the critical angle of their direction and device state."""
-    out = np.zeros(phi.shape, dtype=bool)
-    for s in (1, -1):
-        for flag in (True, False):
-            c = crit[(s, flag)]
-            if math.isfinite(c):
-                out |= (s * phi > c) & (intact == flag)
-    return out
-
-
-def _exceeded(phis: np.ndarray, crit: dict, intact: np.ndarray) -> bool:
-    """Whether |phi| exceeded the critical angle of its direction and device state
-    (``intact``: the devices' state at each sample)."""
-    if not len(phis):
-        return False
-    for s in (1, -1):
-        for flag in (True, False):
-            c = crit[(s, flag)]
-            if not math.isfinite(c):
-                continue
-            m = intact == flag
-            if np.any(s * phis[m] > c):
-                return True
-    return False

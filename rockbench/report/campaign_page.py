@@ -10,6 +10,7 @@ from html import escape
 import pandas as pd
 
 from ..comparison import DERIVED_COLUMNS, METRIC_COLUMNS
+from ..run_length import describe
 from . import figures as F
 from . import html as H
 from .tables import CAMPAIGN_COLUMNS
@@ -297,7 +298,7 @@ def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tupl
              ("pulse (A, W) points", ", ".join(f"({a:g}, {w:g})"
                                                for a, w in plan["pulse_points"])),
              ("pulse shapes", ", ".join(f"{s} {g:+d}" for s, g in plan["pulse_shapes"])),
-             ("pulse run length", f"pulse window (6 T_g) + {plan['pulse_tail']:g} s"),
+             ("pulse run length", describe("pulse", plan["pulse_tail"])),
              ("free rocking", f"phi0 = {plan['free_phi0']:g} alpha, "
                               f"{plan['free_duration']:g} s"),
              ("time steps [s]", ", ".join(f"{d:g}" for d in plan["dt_sweep"])),

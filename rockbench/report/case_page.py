@@ -17,6 +17,7 @@ import pandas as pd
 
 from ..comparison import DERIVED_COLUMNS, ETA_COLUMNS, METRIC_COLUMNS, with_derived
 from ..result import motion_label
+from ..run_length import describe
 from . import figures as F
 from .html import (_dl, conclusion_html, figure_html, fmt, grade_legend, html_metric_table,
                    html_table, render_page, versions_html)
@@ -185,8 +186,8 @@ def write_case_report(comparison, out_dir, *, histories: bool = True,
     run_items = [("scene", scene.name), ("description", getattr(scene, "description", "")),
                  ("ground motion", mlabel), ("motion parameters", motion),
                  ("phi0 [rad]", comparison.phi0),
-                 ("duration [s]", getattr(comparison, "duration", None) or "default (motion "
-                  "length + 10 s, or 10 s of free rocking)")]
+                 ("duration [s]", getattr(comparison, "duration", None)
+                  or f"default ({describe()})")]
     set_items = [(f"settings {k}", v) for k, v in (getattr(comparison, "settings", None) or {
         k: r.settings for k, r in comparison.results.items()}).items()]
     settings_html = ("<h3>Run</h3>" + _dl(run_items) + "<h3>Analytic constants</h3>"

@@ -43,6 +43,7 @@ from typing import Any, Mapping
 
 from ..errors import ParameterError, SceneError, check_range
 from ..limits import LIMITS, check_in_limit, override_hint
+from ..values import parse_value
 from .contact import Contact
 from .devices import Devices
 from .schema import fields_of, required
@@ -457,13 +458,10 @@ def builtin_scenes() -> dict[str, str]:
 
 
 def _parse_value(raw: str) -> Any:
-    low = raw.strip().lower()
-    if low in ("none", "null", ""):
-        return None
-    if low in ("block", "frame"):
-        return low
+    """A scene override's value (:func:`rockbench.values.parse_value`): a number, none (the
+    field's default) or a structure type."""
     try:
-        return float(raw)
+        return parse_value(raw, 0.0, nullable=True, words=("block", "frame"))
     except ValueError:
         raise SceneError(f"cannot parse value {raw!r}: expected a number or 'none'") from None
 

@@ -40,7 +40,7 @@ def precision_knob(engine: str) -> tuple[str, tuple[float, ...]]:
     """(name, values from coarse to fine) of ``engine``'s precision knob: the first of its
     work-precision curves (its backend's ``precision_sweeps``) that sweeps its own knob with
     its own values (e.g. an error-controlled integrator's accuracy), else
-    ``("dt", DT_LADDER)`` (:data:`rockbench.studies.tradeoff_tables.DT_LADDER`)."""
+    ``("dt", DT_LADDER)`` (:data:`rockbench.constants.DT_LADDER`)."""
     from .tradeoff_tables import DT_LADDER, precision_sweeps
 
     for knob, values, fixed in precision_sweeps(engine):
@@ -58,12 +58,10 @@ def setting_args(engine: str, settings: dict[str, Any]) -> list[str]:
 def _settings_of(engine: str, label: str) -> dict[str, Any]:
     """The mapping ``rb.run(**settings)`` takes for a setting label (output_dt raised to dt
     where dt exceeds the default output interval)."""
-    from .tradeoff import Setting, _parse_value, _run_overrides
+    from ..engines.setting_text import parse_overrides
+    from .tradeoff import Setting, _run_overrides
 
-    over = {}
-    for part in str(label).split(","):
-        k, v = part.split("=", 1)
-        over[k] = _parse_value(v)
+    over = parse_overrides(str(label), option="setting").for_engine(engine)
     return _run_overrides(Setting(engine, tuple(sorted(over.items()))))
 
 

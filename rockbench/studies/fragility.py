@@ -29,8 +29,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..constants import FREE_TAIL
 from ..errors import ParameterError, check_finite
+from ..run_length import run_length
 from .ensembles import describe_ensemble, record_ims, resolve_records
 from .fragility_stats import N_BOOT, analyse, check_bootstrap, numerical_dispersion, stripes
 from .intensity import MEASURES, Structure
@@ -91,7 +91,7 @@ def parse_scales(text: Any) -> np.ndarray:
 
 def run_lengths(ims: pd.DataFrame, tail: float | None) -> dict[str, float | None]:
     """The run length [s] of each record (``ims``: :func:`record_ims`, by ``path``): None (the
-    package default, the record + :data:`rockbench.constants.FREE_TAIL`) when ``tail`` is None;
+    package default, :func:`rockbench.run_length.run_length` of the record) when ``tail`` is None;
     else the record's end of strong motion t_95 (95 % of int a_g^2 dt) + ``tail`` [s] (>= 0),
     rounded up to a multiple of :data:`RUN_GRID`, and never longer than the default. What is
     left out is the record's weakest 5 % of int a_g^2 dt after t_95 + tail: a frame still
@@ -104,7 +104,7 @@ def run_lengths(ims: pd.DataFrame, tail: float | None) -> dict[str, float | None
     out = {}
     for p, t95, d in zip(ims["path"], ims["t95"], ims["duration"]):
         cut = RUN_GRID * math.ceil((float(t95) + tail) / RUN_GRID - 1e-9)
-        out[p] = float(cut) if cut < d + FREE_TAIL else None
+        out[p] = float(cut) if cut < run_length(float(d)) else None
     return out
 
 

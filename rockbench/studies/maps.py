@@ -30,17 +30,18 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from ..constants import FALL_EXTENSION, FREE_TAIL
 from .map_cells import (check_vertical_ratio, cell_outside, mark_outside, mirror_twins,
                         with_mirrored)
 from ..errors import ParameterError, RockbenchError
+from ..run_length import pulse_run_length
 from ..sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
                               error_rows, input_differences, load_map, map_rows, open_map_store,
                               part_files, read_inputs, simulated_rows, store_error, store_inputs,
                               tidy_map, write_part)
+from ..verdict import fall_under_way, finish_fall
 
 __all__ = ["MAP_COLUMNS", "PULSES", "map_cells", "run_map", "load_map", "reuse_map",
-           "cell_duration", "check_vertical_ratio", "cell_outside", "mark_outside"]
+           "check_vertical_ratio", "cell_outside", "mark_outside"]
 
 #: The pulses of a map: name -> (shape, sign).
 PULSES: dict[str, tuple[str, int]] = {"symmetric+": ("symmetric", 1),
@@ -125,17 +126,6 @@ def _axes(grid: Any, amplitude: Any, frequency: Any) -> tuple[np.ndarray, np.nda
 # ------------------------------------------------------------------------------------------
 # Running a map
 # ------------------------------------------------------------------------------------------
-def cell_duration(scene, W: float, tail: float | None) -> float | None:
-    """Run length [s] of a pulse cell (a map's, or any Ricker-pulse case of the campaign): the
-    pulse window 6 T_g (T_g = 2 pi / (W p), p of the taller column) plus ``tail`` [s] of free
-    rocking; None (the package default, the motion + 10 s) when ``tail`` is None."""
-    if tail is None:
-        return None
-    return 6.0 * 2.0 * math.pi / (W * scene.p) + tail
-
-
-
-
 def _load_scene_ref(ref: Any, overrides: dict | None = None):
     """A Scene from what travels to a worker: a built-in name or a path (with ``overrides``),
     or a scene's table (:meth:`Scene.to_dict`, overrides already applied)."""
@@ -149,8 +139,10 @@ def _load_scene_ref(ref: Any, overrides: dict | None = None):
 def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
                    extra: float = 0.0, parallel: bool = False,
                    vertical: float = 0.0) -> pd.DataFrame:
-    """Map rows of analytic ``cells`` in their order, each run for its map length plus
-    ``extra`` seconds (``parallel``: the compiled kernel's cells on numba's threads).
+    """Map rows of analytic ``cells`` in their order, each run for its map length
+    (:func:`rockbench.run_length.pulse_run_length`) plus ``extra`` seconds (``parallel``: the
+    compiled kernel's cells on numba's threads); on the compiled path with the last state of
+    each run (``phi_end``, ``intact_end``) after the map's columns.
 
     With a vertical part (``vertical`` = r > 0: a_v = r u_g'', in phase) the compiled path runs
     each cell as one call of the run kernel on its pulse
@@ -161,25 +153,23 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
         if tail is None and not extra:
             df = run_pulse_grid(scene, cells, parallel=parallel, vertical_ratio=vertical)
         else:
-            t = FREE_TAIL if tail is None else tail
             byw: dict[float, list] = {}
             for i, c in enumerate(cells):
                 byw.setdefault(c[3], []).append(i)
             df = pd.concat([run_pulse_grid(scene, [cells[i] for i in ix],
-                                           duration=cell_duration(scene, w, t + extra),
+                                           duration=pulse_run_length(w, scene.p, tail, extra),
                                            parallel=parallel, vertical_ratio=vertical)
                             for w, ix in byw.items()], ignore_index=True)
             order = np.concatenate([np.asarray(ix) for ix in byw.values()])
             df = df.iloc[np.argsort(order, kind="stable")].reset_index(drop=True)  # cells' order
-        return df[list(MAP_COLUMNS)]
+        return df[[*MAP_COLUMNS, "phi_end", "intact_end"]]
     from ..runner import run
     from ..scene.motion import RickerPulse
     rows = []
     for shape, sign, A, W in cells:
         pulse = RickerPulse.dimensionless(A, W, scene.structure, shape, sign,
                                           vertical_ratio=vertical)
-        dur = None if tail is None and not extra else cell_duration(
-            scene, W, (FREE_TAIL if tail is None else tail) + extra)
+        dur = pulse_run_length(W, scene.p, tail, extra)
         r = run(scene, pulse, history="minimal", duration=dur)
         s = r.summary
         rows.append({"amplitude": A, "frequency": W, "pulse": shape, "sign": sign,
@@ -191,14 +181,8 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
 
 
 def _analytic_chunk(args: tuple) -> pd.DataFrame:
-    """One chunk of analytic cells (in a worker): compiled path or the solve_ivp reference.
-
-    The verdict rule is the engines' (``engines/loop.py`` ``_collapse``): a structure that is
-    past its critical angle when the ground motion is over falls. The reference model does not
-    stop short of the fall angle, so a cell that exceeded its critical angle and had not
-    fallen by the end of its run is run again :data:`~rockbench.constants.FALL_EXTENSION` seconds longer: a fall
-    under way is finished (its row is the longer run's); a frame that came back keeps its
-    verdict."""
+    """One chunk of analytic cells (in a worker): compiled path or the solve_ivp reference,
+    a fall under way finished (:func:`_analytic_cells`)."""
     scene_ref, overrides, cells, method, tail, vertical = args
     return _analytic_cells(_load_scene_ref(scene_ref, overrides), cells, method, tail,
                            vertical=vertical)
@@ -206,23 +190,38 @@ def _analytic_chunk(args: tuple) -> pd.DataFrame:
 
 def _analytic_cells(scene, cells: Sequence, method: str, tail: float | None,
                     parallel: bool = False, vertical: float = 0.0) -> pd.DataFrame:
-    """The rows of analytic ``cells``, a fall under way finished (:func:`_analytic_chunk`)."""
+    """The rows of analytic ``cells``, each fall under way at the end of its run finished by
+    the verdict rule of every backend (:mod:`rockbench.verdict`: a cell that ends past its
+    critical angle is run :data:`~rockbench.constants.FALL_EXTENSION` seconds longer, and the
+    longer run's row stands if it fell). The ``solve_ivp`` path runs each cell through the
+    analytic backend, which finishes its own falls; the compiled path's cells are finished
+    here (their cost: both runs)."""
     df = _analytic_rows(scene, cells, method, tail, parallel=parallel, vertical=vertical)
-    pending = ((df["status"] == "ok") & df["exceeded_critical"].astype(bool)
-               & ~df["overturned"].astype(bool)).to_numpy()
-    if pending.any():
-        again = [c for c, p in zip(cells, pending) if p]
-        longer = _analytic_rows(scene, again, method, tail, extra=FALL_EXTENSION,
-                                parallel=parallel, vertical=vertical)
-        df = df.copy()
-        idx = np.flatnonzero(pending)
-        for col in MAP_COLUMNS:
-            if col != "cpu_s":
-                df[col] = df[col].astype(object)
-                df.loc[idx, col] = longer[col].to_numpy(dtype=object)
-        df.loc[idx, "cpu_s"] = (df.loc[idx, "cpu_s"].to_numpy(float)
-                                + longer["cpu_s"].to_numpy(float))
-    return df
+    if method != "compiled":
+        return df
+    from ..analytic.reference import reference_of
+
+    cols = list(MAP_COLUMNS)
+    under = fall_under_way(df["status"].to_numpy(), df["overturned"].to_numpy(dtype=bool),
+                           df["phi_end"].to_numpy(dtype=float),
+                           df["intact_end"].to_numpy(dtype=bool), reference_of(scene).critical)
+    pending = np.flatnonzero(under)
+    df = df[cols]
+    if not pending.size:
+        return df
+    short = df.iloc[pending].to_dict("records")
+    done, longer = finish_fall(
+        short, [True] * len(short),
+        lambda ix, extension: _analytic_rows(
+            scene, [cells[pending[k]] for k in ix], method, tail, extra=extension,
+            parallel=parallel, vertical=vertical)[cols].to_dict("records"),
+        fell=lambda row: bool(row["overturned"]))
+    rows = df.to_dict("records")
+    for k, i in enumerate(pending):
+        rows[i] = dict(done[k], cpu_s=float(short[k]["cpu_s"]) + float(longer[k]["cpu_s"]))
+    return pd.DataFrame(rows, columns=cols)
+
+
 #: Cells per part of an analytic map run in this process (its progress and store grain).
 LOCAL_CHUNK = 2000
 
@@ -459,7 +458,7 @@ def _engine_rows(scene_ref: Any, overrides: dict | None, engine: str, settings: 
     sc = _load_scene_ref(scene_ref, overrides)
     extra = {"vertical_ratio": float(vertical)} if vertical else {}
     cases = [{"scene": scene_ref, "overrides": overrides or {}, "engine": engine,
-              "settings": settings, "duration": cell_duration(sc, W, tail),
+              "settings": settings, "duration": pulse_run_length(W, sc.p, tail),
               "motion": {"kind": "ricker", "shape": sh, "sign": sg, "A": A, "W": W, **extra}}
              for sh, sg, A, W in cells]
     rows = run_cases(cases, on_rows=(None if on_rows is None else

@@ -201,7 +201,7 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
     budget_cpu_s : the most CPU seconds the search may spend ("auto": :data:`BUDGETS` of the
         size; None: no limit).
     dts : the time-step ladder [s] of engines whose knob is dt (default
-        :data:`rockbench.studies.tradeoff_tables.DT_LADDER`).
+        :data:`rockbench.constants.DT_LADDER`).
     contact : measure each engine's contact variants (its backend's ``contact_variants``)
         first, and search the helpful ones too (``rockbench advise --full``).
     seed : the evidence's split (default :data:`rockbench.studies.validation.SEED`).

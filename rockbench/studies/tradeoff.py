@@ -3,7 +3,7 @@
 :func:`tradeoff` runs a fixed **validation set** of a scene
 (:func:`rockbench.studies.validation.validation_set`, re-exported here) with every selected engine at
 every setting (by default the one ladder of time steps,
-:data:`rockbench.studies.tradeoff_tables.DT_LADDER`), with
+:data:`rockbench.constants.DT_LADDER`), with
 repeats, and measures
 
 * **accuracy against the analytic reference** (:func:`rockbench.comparison.metrics` on every run):
@@ -45,7 +45,7 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 from ..errors import ParameterError
 from .tradeoff_tables import (DT_LADDER, RUN_COLUMNS, TABLE_COLUMNS, VERDICTS, Tradeoff, runs_frame,
@@ -53,6 +53,9 @@ from .tradeoff_tables import (DT_LADDER, RUN_COLUMNS, TABLE_COLUMNS, VERDICTS, T
                               precision_sweeps, summarize)
 from .validation import (ValidationCase, _analytic, _scene_from_key,
                          _scene_key, overturn_threshold, validation_set)
+
+if TYPE_CHECKING:
+    from ..engines.setting_text import Overrides
 
 __all__ = ["precision_sweeps", "ValidationCase", "validation_set",
            "overturn_threshold", "Setting", "settings_grid", "tradeoff", "Tradeoff", "summarize",
@@ -104,55 +107,30 @@ class Setting:
         return Setting(self.engine, tuple(sorted(d.items())))
 
 
-def _parse_value(text: str) -> Any:
-    t = text.strip()
-    for conv in (int, float):
-        try:
-            return conv(t)
-        except ValueError:
-            pass
-    if t.lower() in ("true", "false"):
-        return t.lower() == "true"
-    return t
-
-
-def parse_setting(text: str) -> dict[str, Any]:
-    """``"iterations=50"`` or ``"pymunk:iterations=50,collision_slop=1e-4"`` -> overrides
-    (an optional ``engine:`` prefix is returned under the key ``"__engine__"``)."""
-    out: dict[str, Any] = {}
-    if ":" in text.split("=", 1)[0]:
-        eng, text = text.split(":", 1)
-        out["__engine__"] = eng.strip()
-    for part in text.split(","):
-        if not part.strip():
-            continue
-        if "=" not in part:
-            raise ParameterError("setting", part, "name=value (e.g. iterations=50)")
-        k, v = part.split("=", 1)
-        out[k.strip()] = _parse_value(v)
-    return out
-
-
 def settings_grid(engines: Sequence[str], dts: Iterable[float] | None = None,
-                  extra: Sequence[Mapping[str, Any] | str] | None = None) -> list[Setting]:
+                  extra: Sequence[Mapping[str, Any] | str | Overrides] | None = None
+                  ) -> list[Setting]:
     """Every (engine, setting) of a sweep: each engine at each ``dt`` [s] (default
-    :data:`DT_LADDER`), and each ``extra`` override set (a dict or ``"name=value,..."``,
-    optionally ``"engine:name=value"`` for one engine only) at each dt, unless it sets dt
-    itself. Settings are validated by the engines when they run."""
+    :data:`DT_LADDER`), and each ``extra`` override set at each dt, unless it sets dt itself.
+    An extra set is text in the one setting grammar (:mod:`rockbench.engines.setting_text`:
+    ``"iterations=50"`` for every engine, ``"pymunk.iterations=50,collision_slop=1e-4"`` or
+    the older ``"pymunk:iterations=50"`` for one), a mapping (every engine; values as given) or
+    an :class:`~rockbench.engines.setting_text.Overrides`; text is typed by each engine's
+    Settings. Settings are validated by the engines when they run."""
+    from ..engines.setting_text import parse_overrides
+
     dts = [float(d) for d in (DT_LADDER if dts is None else dts)]
     for d in dts:
         if not (d > 0 and math.isfinite(d)):
             raise ParameterError("dt", d, "> 0 [s]")
-    extras: list[dict[str, Any]] = [{}]
-    for e in extra or []:
-        extras.append(parse_setting(e) if isinstance(e, str) else dict(e))
+    extras = [parse_overrides({})] + [parse_overrides(e, option="setting")
+                                      for e in extra or []]
     out: list[Setting] = []
     for eng in engines:
-        for ex in extras:
-            ex = dict(ex)
-            only = ex.pop("__engine__", None)
-            if only is not None and only != eng:
+        for over in extras:
+            if not over.applies_to(eng):
                 continue
+            ex = over.for_engine(eng)
             # each of the engine's curves (precision_sweeps: dt for every engine but those
             # whose class declares its own knob); an extra that sets the knob is run as given
             for knob, values, fixed in (precision_sweeps(eng) if not ex else

@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 import pandas as pd
 
+from ..constants import DT_LADDER
+
 if TYPE_CHECKING:
     from .validation import ValidationCase
 
@@ -24,9 +26,6 @@ __all__ = ["DT_LADDER", "VERDICTS", "precision_sweeps", "case_error", "classify_
            "runs_frame", "add_self_consistency", "curve_of",
            "TABLE_COLUMNS", "summarize", "Tradeoff", "machine_info"]
 
-#: The one ladder of engine time steps [s], coarse to fine: what a work-precision sweep, a
-#: search (``rockbench advise``, the report) and a precision curve of dt run by default.
-DT_LADDER: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
 
 #: Classes of agreement with the analytic model, best first (``verdict`` columns of the
 #: tradeoff, advise and stress tables). "outside model" is used by :mod:`rockbench.studies.robustness` only.

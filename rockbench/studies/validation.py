@@ -62,6 +62,7 @@ from typing import Any
 
 from ..constants import G
 from ..errors import ParameterError
+from ..run_length import run_length
 from ..validity import motion_validity
 from .map_agreement import NEAR_BOUNDARY_MARGIN
 
@@ -96,7 +97,9 @@ MIN_PEAK = 0.05
 _FREE_PHI0 = (0.1, 0.3, 0.7)         # x alpha, both directions
 RECORD_FACTORS = (1.3, 2.0, 3.0)     # x the uplift PGA g min|lambda|
 _RECORD_DURATION = 15.0              # s from the record's start
-_AWAY_TAIL = 2.5                     # s after the pulse's strong part (1.5 T_g after the centre)
+#: Free rocking [s] after a pulse's strong part (run_length's window "strong": the runs of
+#: the validation set are repeated at every time step of every engine, so they end early).
+_AWAY_TAIL = 2.5
 _OVER_TAIL = 8.0                     # s after it for near and overturning cells (finish a fall)
 _FALL = 4.0                          # x alpha: fall angle of every pulse cell
 _A_MAX = 30.0                        # no overturning below this A: the pulse is left out
@@ -209,12 +212,6 @@ def _fall(scene) -> float:
     return min(_FALL * scene.alpha, min(scene.fall_angles.values()))
 
 
-def _pulse_duration(p, tail: float) -> float:
-    """Simulated time [s] from the pulse's start (-3 T_g) to ``tail`` s after its strong part
-    (|t| < 1.5 T_g)."""
-    return round(1.5 * p.period + tail - p.t_start, 4)
-
-
 @functools.lru_cache(maxsize=512)
 def _threshold(key: str, W: float, shape: str, sign: int, rtol: float) -> float:
     scene = _scene_from_key(key)
@@ -222,7 +219,7 @@ def _threshold(key: str, W: float, shape: str, sign: int, rtol: float) -> float:
 
     def overturns(A: float) -> bool:
         p = _pulse(sc, A, W, shape, sign)
-        return bool(_analytic(sc, p, _pulse_duration(p, _OVER_TAIL),
+        return bool(_analytic(sc, p, run_length(p, _OVER_TAIL, window="strong"),
                               compiled=True).summary.overturned)
 
     lo, hi = 1.0, 1.5
@@ -363,7 +360,8 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
         p = _pulse(sc, A, W, shape, sign)
         if not motion_validity(sc, p):           # outside the model: its base would slide
             return None
-        dur = _pulse_duration(p, _OVER_TAIL if (near or ratio > 1) else _AWAY_TAIL)
+        dur = run_length(p, _OVER_TAIL if (near or ratio > 1) else _AWAY_TAIL,
+                         window="strong")
         r = _analytic(sc, p, dur, compiled=True)
         if not r.summary.uplifted or r.summary.max_abs_phi_over_alpha < MIN_PEAK:
             return None

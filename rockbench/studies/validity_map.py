@@ -152,14 +152,14 @@ def _run_cell(item: Mapping[str, Any]) -> dict[str, Any]:
     from ..runner import run
     from ..scene.motion import RickerPulse
     from ..scene.scene import Scene
+    from ..run_length import pulse_run_length
     from ..validity import motion_validity
-    from .maps import cell_duration
 
     scene = Scene.from_dict(item["scene"], source=f"scene {item['scene'].get('name', '')!r}")
     A, W = float(item["A"]), float(item["W"])
     motion = RickerPulse.dimensionless(A, W, scene.structure, item["shape"], int(item["sign"]),
                                        float(item["vertical_ratio"]))
-    dur = cell_duration(scene, W, item["tail"])
+    dur = pulse_run_length(W, scene.p, item["tail"])
     row = {"case_id": item["case_id"], "A": A, "W": W}
     try:
         s = run(scene, motion, duration=dur, history="minimal").summary

@@ -24,7 +24,7 @@ __all__ = ["MAP_COLUMNS", "MAP_KEY", "COMPACT_EVERY", "tidy_map", "simulated_row
            "cell_key", "store_inputs", "INPUT_DEFAULTS", "input_differences",
            "describe_differences", "read_inputs", "part_files", "open_map_store", "write_part",
            "compact_map_store", "load_map_parts", "load_map", "store_error", "map_rows",
-           "error_rows"]
+           "error_rows", "map_store_path"]
 
 #: Columns of a map, with unit and meaning.
 MAP_COLUMNS: dict[str, str] = {
@@ -111,6 +111,13 @@ def error_rows(cells, why: str) -> pd.DataFrame:
                          for sh, sg, A, W in cells], columns=list(MAP_COLUMNS))
 
 
+def map_store_path(folder: str | os.PathLike, scene: str, engine: str, *tags: str) -> Path:
+    """The map store of ``scene``'s map by ``engine`` in ``folder``:
+    ``<folder>/<scene>_<engine>[_<tag>...].parquet`` (a tag: the grid, ``"12x12"``, or what
+    else sets the map apart, ``"vertical0.5"``)."""
+    return Path(folder) / ("_".join([scene, engine, *tags]) + ".parquet")
+
+
 def store_inputs(scene, scene_ref: str, engine: str, settings: dict, method: str,
                  tail: float | None, keyed_by_code: bool = True,
                  vertical_ratio: float = 0.0) -> dict[str, Any]:
@@ -119,15 +126,15 @@ def store_inputs(scene, scene_ref: str, engine: str, settings: dict, method: str
     and the engine's version only, and its reuse must be verified by re-running sample cells
     (:func:`reuse_map`). ``vertical_ratio`` r > 0 (every pulse's a_v = r u_g'') is an input
     too; a map without one has no such key (:data:`INPUT_DEFAULTS`: it reads as 0)."""
-    from ..constants import FREE_TAIL
     from ..engines import engine_info
+    from ..run_length import describe
     from .store import code_fingerprint
 
     out = {"scene": scene.to_dict(), "scene_ref": scene_ref, "engine": engine,
            "engine_version": next((str(r.get("version", r.get("reason")))
                                    for r in engine_info([engine])), ""),
            "settings": {k: settings[k] for k in sorted(settings)}, "method": method,
-           "duration": f"pulse window (6 T_g) + {FREE_TAIL if tail is None else tail:g} s"}
+           "duration": describe("pulse", tail)}
     if vertical_ratio:
         out["vertical_ratio"] = float(vertical_ratio)
     if keyed_by_code:

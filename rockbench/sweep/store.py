@@ -38,7 +38,8 @@ import pandas as pd
 
 from ..errors import ParameterError, RockbenchError, RockbenchWarning
 
-__all__ = ["key", "canonical", "code_fingerprint", "store_dir", "need_pyarrow", "have_pyarrow",
+__all__ = ["key", "canonical", "code_fingerprint", "store_dir", "default_store", "store_path",
+           "need_pyarrow", "have_pyarrow",
            "write_row", "load_store", "compact", "write_payload", "load_payload", "writer_lock",
            "store_error", "quarantine"]
 
@@ -71,7 +72,8 @@ def key(item: Any) -> str:
 #: lists, which are inputs that the stores key on) enters the fingerprint, so editing a help
 #: text or a figure keeps every stored result.
 PHYSICS_CODE = ("analytic", "engines", "scene", "scenarios", "measure.py", "constants.py",
-                "result.py", "comparison.py", "runner.py", "studies/sensitivity.py")
+                "result.py", "comparison.py", "runner.py", "studies/sensitivity.py",
+                "verdict.py", "run_length.py")
 
 
 def fingerprint_files() -> list[str]:
@@ -116,6 +118,12 @@ def store_dir(store: str | os.PathLike) -> Path:
     if p.exists() and not p.is_dir():
         raise ParameterError("store", str(store), "a directory (created if missing)")
     return p
+
+
+def default_store(folder: str | os.PathLike) -> Path:
+    """The store of a command whose outputs go to ``folder`` when it is given none:
+    ``<folder>/store`` (the kinds inside it: :func:`store_path`)."""
+    return store_dir(Path(folder) / "store")
 
 
 def store_path(store: str | os.PathLike, kind: str, *, keyed: bool = True) -> Path:

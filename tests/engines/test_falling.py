@@ -69,11 +69,11 @@ def test_a_frame_that_comes_to_rest_beyond_its_critical_angle_has_collapsed():
     if "pymunk" not in rb.available_backends():
         pytest.skip("pymunk is not installed")
     from rockbench.analytic.reference import reference_of
-    from rockbench.studies.maps import cell_duration as _duration
+    from rockbench.run_length import pulse_run_length
 
     scene = rb.load_scene("paper-asymmetric")
     pulse = rb.RickerPulse.dimensionless(6.7272727, 1.0, scene.structure, "symmetric", 1)
-    r = rb.run(scene, pulse, engine="pymunk", duration=_duration(scene, 1.0, 3.0))
+    r = rb.run(scene, pulse, engine="pymunk", duration=pulse_run_length(1.0, scene.p, 3.0))
     s = r.summary
     assert s.status == "ok" and s.overturned and s.exceeded_critical
     crit = reference_of(scene).critical[(-1, False)]
