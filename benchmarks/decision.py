@@ -92,7 +92,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from compiled_analytic import machine
 
-    scenes = [Path(s) for s in args.scene] if args.scene else list(SCENES)
+    scenes = [Path(s).resolve() for s in args.scene] if args.scene else list(SCENES)
     with tempfile.TemporaryDirectory() as tmp:        # kernels into the JIT cache first
         timed(["map", "paper-symmetric", "--grid", "2x2", "--store", "m", "--quiet"],
               Path(tmp))

@@ -108,7 +108,8 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
         whys = []
         for g in dict.fromkeys((fg, mg)):
             path = map_store_path(measured, lab, eng, f"{g[0]}x{g[1]}")
-            df, w = reuse_map(path, sc, eng, **dict(axes, grid=g))
+            df, w = reuse_map(path, sc, eng, **dict(axes, grid=g),
+                              workers=run.get("workers"))
             if df is not None and not (full and g != fg):   # --full wants the finest
                 return df, g, w
             whys.append(w)
@@ -170,7 +171,8 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
             if key not in out["overlay_ref"]:
                 out["overlay_ref"][key] = mark_near_boundary(run_map(
                     sc, "analytic", store=map_store_path(store, lab, "analytic", f"{g[0]}x{g[1]}"),
-                    **cells, **run), sc, tail=axes["tail"])
+                    **cells, **run), sc, tail=axes["tail"],
+                    parallel=run.get("workers") != 1)
             ref = out["overlay_ref"][key]
             out["engine"][(lab, eng)] = df
             ag = map_agreement(ref, df)

@@ -61,11 +61,13 @@ def overlapping_texts(fig: Figure, *, tolerance_px: float = 1.0) -> list[tuple[s
     """Pairs of texts of one axes whose drawn boxes overlap by more than ``tolerance_px`` in
     both directions, as (text, text): tick labels of the same axis with each other (the
     crowded-log-axis case), and the axis labels and title with every tick label and each other.
-    (An x and a y tick label meeting at the axes' corner is not counted.) Draws the figure."""
+    (An x and a y tick label meeting at the axes' corner is not counted.) Lays the figure out
+    as drawing it would (its layout engine run, nothing rasterized: the PNG is drawn once,
+    later)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     canvas = FigureCanvasAgg(fig)   # a Figure built without pyplot has no drawing canvas
-    canvas.draw()
+    fig.draw_without_rendering()
     renderer = canvas.get_renderer()
 
     def shown(texts):

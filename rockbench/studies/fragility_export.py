@@ -180,7 +180,11 @@ def to_nrml(curves: Sequence[FragilityCurve] | FragilityCurve,
     (:func:`lognormal_moments`) in OpenQuake's unit of the IMT (:data:`OPENQUAKE_IMT`).
     ``min_iml`` < ``max_iml`` (and ``no_damage_limit``) are in rockbench's unit of the
     measure (m/s^2 or m/s), > 0, converted like the moments: the range of intensities over
-    which OpenQuake uses the functions (typically the range of the fit's runs).
+    which OpenQuake uses the functions (typically the range of the fit's runs; outside it
+    OpenQuake holds each curve at its value at the nearer end). ``no_damage_limit``, in
+    [``min_iml``, ``max_iml``): at and below it OpenQuake's probability is 0. OpenQuake clamps
+    the intensity to minIML before it compares it with the limit, so a limit below
+    ``min_iml`` would have no effect at all: refused.
     ``loss_category``: one of OpenQuake's "structural", "nonstructural", "contents",
     "business_interruption"."""
     curves = _checked(curves)
@@ -192,6 +196,13 @@ def to_nrml(curves: Sequence[FragilityCurve] | FragilityCurve,
     lo, hi = check_finite("min_iml", min_iml), check_finite("max_iml", max_iml)
     if not 0.0 < lo < hi:
         raise ParameterError("max_iml", max_iml, f"> min_iml = {lo:g} > 0")
+    ndl = None
+    if no_damage_limit is not None:
+        ndl = check_finite("no_damage_limit", no_damage_limit)
+        if not lo <= ndl < hi:
+            raise ParameterError("no_damage_limit", no_damage_limit,
+                                 f"in [min_iml, max_iml) = [{lo:g}, {hi:g}) (OpenQuake clamps "
+                                 "the intensity to minIML first: a lower limit has no effect)")
     measure = curves[0].measure
     imt, oq_unit, factor = OPENQUAKE_IMT[measure]
     name, unit = MEASURES[measure][:2]
@@ -212,10 +223,7 @@ def to_nrml(curves: Sequence[FragilityCurve] | FragilityCurve,
         ff = ET.SubElement(model, q + "fragilityFunction",
                            {"id": c.id, "format": "continuous", "shape": "logncdf"})
         imls = {"imt": imt, "minIML": _number(lo * factor), "maxIML": _number(hi * factor)}
-        if no_damage_limit is not None:
-            ndl = check_finite("no_damage_limit", no_damage_limit)
-            if not 0.0 <= ndl < hi:
-                raise ParameterError("no_damage_limit", no_damage_limit, f"in [0, {hi:g})")
+        if ndl is not None:
             imls["noDamageLimit"] = _number(ndl * factor)
         ET.SubElement(ff, q + "imls", imls)
         mean, std = lognormal_moments(c.median * factor, c.dispersion)
@@ -234,7 +242,10 @@ def to_pelicun_csv(curves: Sequence[FragilityCurve] | FragilityCurve,
     ``-``: pelicun splits IDs there),
     ``Incomplete`` 0, ``Demand-Type`` and ``Demand-Unit`` (:data:`PELICUN_DEMAND`),
     ``Demand-Offset`` 0, ``Demand-Directional`` 1 (the frame rocks in the plane of the
-    component of ground motion it was analysed for; 0 with ``directional=False``),
+    component of ground motion it was analysed for: pelicun compares the curve with that
+    direction's demand, as fitted; 0 with ``directional=False``: pelicun then compares it with
+    max(direction 1, direction 2) times its ``NonDirectionalMultipliers``, 1.2 by default
+    (FEMA P-58), which shifts the curve unless the assessment sets the multiplier to 1),
     ``LS1-Family`` "lognormal", ``LS1-Theta_0`` the median [Demand-Unit], ``LS1-Theta_1``
     beta [-], ``LS1-DamageStateWeights`` empty (one damage state, DS1 = overturned)."""
     curves = _checked(curves)

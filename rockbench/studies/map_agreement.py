@@ -17,7 +17,7 @@ import pandas as pd
 
 from ..errors import ParameterError, RockbenchError
 from ..sweep.map_store import MAP_KEY, cell_key
-from .maps import _analytic_chunk, _default_method, _load_scene_ref
+from .maps import _analytic_cells, _default_method, _load_scene_ref
 
 __all__ = ["boundary", "mark_near_boundary", "NEAR_BOUNDARY_MARGIN", "map_agreement",
            "describe_shift"]
@@ -45,12 +45,13 @@ NEAR_BOUNDARY_MARGIN = 0.02
 
 def mark_near_boundary(ref: pd.DataFrame, scene: Any, *, margin: float = NEAR_BOUNDARY_MARGIN,
                        tail: float | None = None, overrides: dict | None = None,
-                       method: str | None = None, vertical: float = 0.0) -> pd.DataFrame:
+                       method: str | None = None, vertical: float = 0.0,
+                       parallel: bool = False) -> pd.DataFrame:
     """``ref`` (an analytic map of ``scene``) with a column ``near_boundary``: True where the
     reference verdict changes within ``margin`` (relative) of the cell's A, i.e. where the
     analytic model run at A (1 - margin) or A (1 + margin), same pulse and W, gives the other
     verdict than at A (cells not ok: False). ``tail`` and ``vertical`` (the pulses' vertical
-    ratio) as the map's."""
+    ratio) as the map's; ``parallel``: the compiled path's cells on numba's threads."""
     from ..errors import check_positive
 
     if not 0 < check_positive("margin", margin) < 1:
@@ -69,7 +70,8 @@ def mark_near_boundary(ref: pd.DataFrame, scene: Any, *, margin: float = NEAR_BO
     verdicts = []
     for f in (1.0 - margin, 1.0 + margin):
         cells = [(p, s, a * f, w) for p, s, a, w in base]
-        df = _analytic_chunk((sc.to_dict(), None, cells, method, tail, float(vertical)))
+        df = _analytic_cells(sc, cells, method, tail, vertical=float(vertical),
+                             parallel=parallel and method == "compiled")
         verdicts.append(df["overturned"].astype(bool).to_numpy())
     here = ok["overturned"].astype(bool).to_numpy()
     near = (verdicts[0] != here) | (verdicts[1] != here)

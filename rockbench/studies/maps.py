@@ -516,12 +516,14 @@ class MapReuse(str):
 def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
               amplitude: Any, frequency: Any, pulses: str | Sequence[str] = "all",
               tail: float | None = None, check: int = 4,
-              rtol: float = VERIFY_RTOL) -> tuple[pd.DataFrame | None, MapReuse]:
+              rtol: float = VERIFY_RTOL, workers: int | None = 1
+              ) -> tuple[pd.DataFrame | None, MapReuse]:
     """A measured map (a store written with ``keyed_by_code=False``) if it can be trusted on
     this code and machine: written for the same scene, engine version, default settings and
     run length, complete for the grid, and reproduced at ``check`` cells re-run now (verdicts,
     status and impacts equal, max |phi| / alpha within ``rtol``). Returns (map, how it was
-    verified) or (None, why it is not reused)."""
+    verified) or (None, why it is not reused). ``workers``: processes that re-run the cells
+    (1: in this process)."""
     path = Path(store)
     meta = path / "_inputs.json"
     if not meta.is_file():
@@ -555,7 +557,8 @@ def reuse_map(store: str | os.PathLike, scene: str, engine: str, *, grid: Any,
     picks = _check_cells(df, check)
     now = tidy_map(_engine_rows(str(scene), None, engine, {}, [
         (r.pulse, int(r.sign), float(r.amplitude), float(r.frequency))
-        for r in picks.itertuples()], tail, executor="serial", progress=False))
+        for r in picks.itertuples()], tail, progress=False,
+        **(dict(executor="serial") if workers == 1 else dict(workers=workers))))
     m = picks.merge(now, on=list(MAP_KEY), suffixes=("", "_now"))
     worst = 0.0
     for r in m.itertuples():
