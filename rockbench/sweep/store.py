@@ -73,7 +73,7 @@ def key(item: Any) -> str:
 #: text or a figure keeps every stored result.
 PHYSICS_CODE = ("analytic", "engines", "scene", "scenarios", "measure.py", "constants.py",
                 "result.py", "comparison.py", "runner.py", "studies/sensitivity.py",
-                "verdict.py", "run_length.py")
+                "verdict.py", "run_length.py", "validity.py")
 
 
 def fingerprint_files() -> list[str]:
