@@ -95,19 +95,14 @@ def _per_run(scene, cells, method, ratio):
     (the analytic backend finishes a fall under way itself, as a map does)."""
     import pandas as pd
 
-    from rockbench.studies.maps import MAP_COLUMNS
+    from rockbench.studies.maps import MAP_COLUMNS, map_row
 
     rows = []
     for shape, sign, A, W in cells:
         pulse = rb.RickerPulse.dimensionless(A, W, scene.structure, shape, sign,
                                              vertical_ratio=ratio)
-        r = rb.run(scene, pulse, history="minimal", method=method)
-        s = r.summary
-        rows.append({"amplitude": A, "frequency": W, "pulse": shape, "sign": sign,
-                     "overturned": s.overturned, "exceeded_critical": s.exceeded_critical,
-                     "max_abs_phi_over_alpha": s.max_abs_phi_over_alpha,
-                     "n_impacts": s.n_impacts, "fractured": s.fractured, "status": s.status,
-                     "cpu_s": r.cost.cpu_s})
+        rows.append(map_row((shape, sign, A, W),
+                            rb.run(scene, pulse, history="minimal", method=method)))
     return pd.DataFrame(rows, columns=list(MAP_COLUMNS))
 
 

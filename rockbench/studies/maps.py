@@ -41,7 +41,7 @@ from ..sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, co
 from ..verdict import fall_under_way, finish_fall
 
 __all__ = ["MAP_COLUMNS", "PULSES", "map_cells", "run_map", "load_map", "reuse_map",
-           "check_vertical_ratio", "cell_outside", "mark_outside"]
+           "check_vertical_ratio", "cell_outside", "mark_outside", "map_row"]
 
 #: The pulses of a map: name -> (shape, sign).
 PULSES: dict[str, tuple[str, int]] = {"symmetric+": ("symmetric", 1),
@@ -170,14 +170,20 @@ def _analytic_rows(scene, cells: Sequence, method: str, tail: float | None,
         pulse = RickerPulse.dimensionless(A, W, scene.structure, shape, sign,
                                           vertical_ratio=vertical)
         dur = pulse_run_length(W, scene.p, tail, extra)
-        r = run(scene, pulse, history="minimal", duration=dur)
-        s = r.summary
-        rows.append({"amplitude": A, "frequency": W, "pulse": shape, "sign": sign,
-                     "overturned": s.overturned, "exceeded_critical": s.exceeded_critical,
-                     "max_abs_phi_over_alpha": s.max_abs_phi_over_alpha,
-                     "n_impacts": s.n_impacts, "fractured": s.fractured, "status": s.status,
-                     "cpu_s": r.cost.cpu_s})
+        rows.append(map_row((shape, sign, A, W),
+                            run(scene, pulse, history="minimal", duration=dur)))
     return pd.DataFrame(rows, columns=list(MAP_COLUMNS))
+
+
+def map_row(cell: tuple, result) -> dict[str, Any]:
+    """The map row (:data:`MAP_COLUMNS`) of a cell (shape, sign, A, W) from its run's
+    :class:`~rockbench.result.Result`."""
+    shape, sign, A, W = cell
+    s = result.summary
+    return {"amplitude": A, "frequency": W, "pulse": shape, "sign": sign,
+            "overturned": s.overturned, "exceeded_critical": s.exceeded_critical,
+            "max_abs_phi_over_alpha": s.max_abs_phi_over_alpha, "n_impacts": s.n_impacts,
+            "fractured": s.fractured, "status": s.status, "cpu_s": result.cost.cpu_s}
 
 
 def _analytic_chunk(args: tuple) -> pd.DataFrame:
