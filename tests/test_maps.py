@@ -289,15 +289,30 @@ def test_map_figure_and_overlay(tmp_path, capsys):
                  str(png), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["figure"] == str(png)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    # the overlay against an independently computed map: the same cells by the solve_ivp
+    # reference path (not the compiled one), which must agree on every verdict
+    ref = tmp_path / "ref.parquet"
+    ref_df = run_map("paper-asymmetric", method="solve_ivp", store=ref, progress=False,
+                     grid=(3, 2), amplitude="2:6", frequency="2:4",
+                     pulses="symmetric+,antisymmetric-")
+    fast = load_map(store)
+    assert ref_df.attrs.get("reused", 0) == 0 and len(fast) == len(ref_df) == 12
+    key = ["pulse", "sign", "amplitude", "frequency"]
+    m = fast.merge(ref_df, on=key, suffixes=("", "_ref"))
+    assert len(m) == 12 and 0 < m["overturned"].astype(bool).sum() < 12   # both regions
+    survived = ~m["overturned"].astype(bool)
+    assert np.allclose(m.loc[survived, "max_abs_phi_over_alpha"],
+                       m.loc[survived, "max_abs_phi_over_alpha_ref"], atol=1e-4)
     over = tmp_path / "overlay.svg"
-    assert main(["map", "--compare", str(store), str(store), "--figure", str(over)]) == 0
+    assert main(["map", "--compare", str(store), str(ref), "--figure", str(over)]) == 0
     text = capsys.readouterr().out
     assert "figure:" in text and b"<svg" in over.read_bytes()[:400]
     assert "near the boundary" in text            # an analytic first map: cells near it marked
-    assert main(["map", "--compare", str(store), str(store), "--json"]) == 0
+    assert main(["map", "--compare", str(store), str(ref), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
+    assert out["n"] == 12 and out["differ"] == 0 and out["kappa"] == pytest.approx(1.0)
     assert out["disagree_near_boundary"] == out["disagree_away"] == 0
-    assert 0 <= out["near_boundary"] <= out["n"] == 12
+    assert 0 <= out["near_boundary"] <= out["n"]
     assert main(["map", "paper-asymmetric", *cells, "--store", str(store), "--figure",
                  str(tmp_path / "m.txt")]) == 2
     assert "--figure" in capsys.readouterr().err

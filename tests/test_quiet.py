@@ -13,6 +13,7 @@ import textwrap
 import pytest
 
 import rockbench as rb
+from rockbench.testing import needs_engine
 from rockbench import progress
 from rockbench.cli.main import main
 
@@ -196,12 +197,11 @@ def test_quiet_makes_every_bar_silent():
         progress.configure(quiet=False)
 
 
+@needs_engine("pymunk")
 @pytest.mark.parametrize("quiet", [False, True])
 def test_run_reports_simulated_time_from_the_stepping_loop(capsys, monkeypatch, quiet):
     """``run`` of an engine shows the simulated time (the hook in engines/loop.py, reached
     every PROBE_CHUNK samples by the Python and the compiled loop); --quiet shows nothing."""
-    if "pymunk" not in rb.available_backends():
-        pytest.skip("pymunk is not installed")
     monkeypatch.setattr(progress, "INTERVAL", 0.0)
     argv = ["run", "housner-block", "--engine", "pymunk", "--phi0-alpha", "0.3",
             "--duration", "2", "--json"]

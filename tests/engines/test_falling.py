@@ -14,7 +14,7 @@ import math
 import pytest
 
 import rockbench as rb
-from rockbench.testing import engine_params
+from rockbench.testing import engine_params, needs_engine
 
 
 @pytest.mark.parametrize("engine", engine_params())
@@ -62,12 +62,11 @@ def test_symmetric_frame_falls_before_lying_flat(engine):
     assert fall * (1 - 1e-9) <= r.summary.max_abs_phi < math.pi / 2
 
 
+@needs_engine("pymunk")
 def test_a_frame_that_comes_to_rest_beyond_its_critical_angle_has_collapsed():
     """pymunk leaves the asymmetric frame lying at 8.3 alpha (its clockwise fall angle is
     8.75 alpha) after the longest symmetric pulse of the report's map: that is an overturn
     (collapse), not survival (docs/conventions.md)."""
-    if "pymunk" not in rb.available_backends():
-        pytest.skip("pymunk is not installed")
     from rockbench.analytic.reference import reference_of
     from rockbench.run_length import pulse_run_length
 

@@ -12,18 +12,18 @@ import numpy as np
 import pytest
 
 import rockbench as rb
+from rockbench.testing import needs_engine
 from rockbench.engines.bodies import body_specs
 from rockbench.engines.contacts import ContactProbe
 
 MINIMAL_COLUMNS = ["t", "phi", "phidot", "ground_acc", "mode", "devices_intact"]
 
 
+@needs_engine("pymunk")
 @pytest.mark.parametrize("name", ["housner-block", "paper-asymmetric"])
 def test_measure_many_equals_a_per_sample_loop(name):
     scene = rb.load_scene(name)
     pulse = rb.RickerPulse.dimensionless(3.0, 4.0, scene.structure, "symmetric", 1)
-    if "pymunk" not in rb.available_backends():
-        pytest.skip("pymunk is not installed")
     r = rb.run(scene, pulse, engine="pymunk", duration=pulse.t_end - pulse.t_start)
     h = r.history
     specs = body_specs(scene)

@@ -178,6 +178,7 @@ def test_batched_mujoco_stops_at_the_verdict_with_unchanged_results():
     assert simulated[1] < n_steps - M.VERDICT_CHUNK
 
 
+@needs_engine("pymunk")
 @pytest.mark.parametrize("name, pulse", [
     ("paper-asymmetric", (2.0, 3.0, "symmetric", 1)),
     ("paper-asymmetric-hybrid", (3.0, 3.0, "antisymmetric", -1)),
@@ -186,8 +187,6 @@ def test_first_impact_on_its_prefix_is_the_full_first_impact(name, pulse):
     """What the map path's validity rule reads (loop._first_eta_finite): the first impact
     measured on the samples up to the last of the excursion it begins is the full history's
     first impact, bit for bit (an impact's measurement reads only its two excursions)."""
-    if "pymunk" not in rb.available_backends():
-        pytest.skip("pymunk is not installed")
     from rockbench.engines.loop import impact_arguments
     from rockbench.engines.pymunk import PymunkSettings
 
