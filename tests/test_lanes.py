@@ -67,3 +67,25 @@ def test_lanes_must_hold_each_part_once():
 def test_a_failing_part_raises_its_error_whichever_lane_it_is_in(lanes):
     with pytest.raises(ValueError, match="part failed on 7"):
         run_parts({"ok": (_pid_and, (1,)), "bad": (_fails, (7,))}, {}, lanes=lanes)
+
+
+def _worker_pids_of_two_sweeps(_: int) -> tuple[set[int], set[int]]:
+    """Two sweeps of one part: the worker processes that ran each."""
+    seen: list[set[int]] = []
+    for _ in range(2):
+        pids: set[int] = set()
+        execute(_pid_and, [(str(i), i) for i in range(6)],
+                on_result=lambda k, r: pids.add(r[0]), crashed=lambda item, why: None,
+                workers=2, progress=False)
+        seen.append(pids)
+    return seen[0], seen[1]
+
+
+def test_a_part_s_sweeps_share_one_pool_of_workers():
+    """Within a part the pools are kept: its second sweep runs on the first one's workers
+    (their imports and compiled kernels paid once); each part has its own."""
+    got = run_parts({"p": (_worker_pids_of_two_sweeps, (0,)),
+                     "q": (_worker_pids_of_two_sweeps, (0,))}, {}, lanes=[["p", "q"]])
+    first, second = got["p"]
+    assert first and first == second and os.getpid() not in first
+    assert not (set(got["q"][0]) & first)

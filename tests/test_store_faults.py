@@ -213,6 +213,30 @@ def test_a_second_writer_is_refused(good, tmp_path, capsys):
     assert run_map("paper-asymmetric", store=copy, progress=False, **CELLS).attrs["reused"] == 6
 
 
+def _sleep_then_pid(seconds: float) -> int:
+    import time
+    time.sleep(seconds)
+    return os.getpid()
+
+
+def test_a_lock_is_released_even_with_a_kept_worker_forked_while_it_was_held(tmp_path):
+    """A pool worker forked while this process held a store's lock shares the lock's open file
+    description; releasing the lock must not wait for that worker to end (a campaign part keeps
+    its pools across its sweeps, so the next write of the same store would be refused)."""
+    from rockbench.sweep.executors import execute, kept_pools
+    from rockbench.sweep.store import writer_lock
+
+    d = tmp_path / "store"
+    with kept_pools():
+        with writer_lock(d):
+            got = []
+            execute(_sleep_then_pid, [("a", 0.01)], on_result=lambda k, r: got.append(r),
+                    crashed=lambda item, why: None, workers=2, progress=False)
+        assert got and got[0] != os.getpid()       # a worker of the kept pool, still alive
+        with writer_lock(d):                      # the same store, written again: not refused
+            pass
+
+
 #: 24 solve_ivp cells of 0.05-0.5 s each, one part file per cell (the store keyed by its
 #: inputs only, so that the subprocess and this one agree on it whatever the code's hash)
 KILLABLE = dict(grid=(6, 4), amplitude="2:8", frequency="2:5", pulses="symmetric+", tail=10.0,

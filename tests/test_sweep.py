@@ -346,7 +346,11 @@ def test_catalogue_holds_the_cross_engine_cases_and_the_campaign_plan():
     assert (ot.scene, ot.W, ot.shape, ot.sign, ot.A, ot.fall) == (
         "paper-asymmetric", 3.0, "symmetric", 1, round(1.2 * 3.2342, 4), 4.0)
     plan = campaign_plan()
-    assert plan["scenes"][0] == "paper-symmetric" and len(plan["scenes"]) == 4
+    assert plan["scenes"][0] == "paper-symmetric" and len(plan["scenes"]) == 3
+    # the frames with fracturing tendons run where they fracture, in the maps and records
+    from rockbench.campaign.plan import every_scene
+    assert every_scene(plan) == ["paper-symmetric", "paper-asymmetric", "paper-asymmetric-hybrid",
+                                 "paper-asymmetric-hybrid-eps1", "paper-asymmetric-hybrid-eps2"]
     assert plan["pulse_points"] == ((2.0, 3.0), (4.0, 4.0))
     assert plan["dt_sweep"] == (2e-3, 1e-3, 5e-4, 2e-4)
     assert "map_A" not in plan and plan["maps"]["analytic_grid"] == (100, 100)

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from ..scene.motion import antisymmetric_beta
+from .tableau import dop853_tableau
 
 try:  # pragma: no cover - exercised by the environment, not by a test
     import numba  # noqa: F401 - re-exported (parallel_chunksize)
@@ -27,15 +28,7 @@ except Exception as exc:  # noqa: BLE001 - any import failure means "no fast pat
     prange = range  # type: ignore[assignment]
 
 # --- the DOP853 tableau (scipy's coefficient table, the scheme the reference path uses) ----------
-def _tableau():
-    from scipy.integrate._ivp import dop853_coefficients as c
-    n = c.N_STAGES
-    return (np.ascontiguousarray(c.A, dtype=np.float64), np.ascontiguousarray(c.B, np.float64),
-            np.ascontiguousarray(c.C, np.float64), np.ascontiguousarray(c.E3, np.float64),
-            np.ascontiguousarray(c.E5, np.float64), np.ascontiguousarray(c.D, np.float64), n)
-
-
-_A, _B, _C, _E3, _E5, _D, _NS = _tableau()
+_A, _B, _C, _E3, _E5, _D, _NS = dop853_tableau()
 _NSE = _A.shape[0]          # stages incl. the three extra ones of the dense output (16)
 _NI = _D.shape[0] + 3       # interpolator power (7)
 

@@ -63,11 +63,19 @@ Along a run: the demand history
 demand) and, for a frame, the **beam** on its columns (B and C; the larger). At rest (mode 0)
 the structure moves with the ground as one rigid body, and every contact's total force is
 m (a_g, g + a_v): the demand is |a_g| / (g + a_v) at the base and under the beam alike (the
-split between two contacts at rest is statically indeterminate; they slide together). While a
-hybrid frame rocks with its devices intact the demand is not computed (NaN): how the
-tendons' and dampers' forces reach the contacts is not part of the SDOF model (the engines'
-:class:`~rockbench.engines.devices.DeviceGeometry` offers three damper models with different
-contact loads); at rest the devices are slack (no pretension) and the demand is exact.
+split between two contacts at rest is statically indeterminate; they slide together). At rest
+the devices are slack (no pretension) and the demand is exact.
+
+While a hybrid frame rocks with its devices intact, their forces enter the nine equations as
+known loads (:func:`_device_loads`): each central unbonded tendon, anchored at the
+foundation and at the beam, pulls with k e_j on the column's base and top centres towards its
+anchors and on the beam towards the column (e_j the model's own elongation, base plus top
+opening), and each damper acts as a couple on its column, -C (dc_j/dt) dc_j/dtheta_j. Their
+virtual work along the mechanism is the model's K and D phi' exactly, so Newton-Euler's own
+phi'' with these loads is Eq. 17's (tested to round-off). The tendons are the paper's geometry;
+the dampers' couple is a choice: the SDOF model fixes only their moment, and a damper whose
+force acts at a column's heel (the engines' ``heel`` model,
+:class:`~rockbench.engines.devices.DeviceGeometry`) would load the contacts differently.
 :func:`first_excess` finds the first time a demand exceeds its friction.
 """
 
@@ -319,10 +327,13 @@ def reaction_history(structure: Block | Frame, direction: int, phi, phidot, phid
 
 # ------------------------------------------------------------------------------------------------
 # Along a run: the demand at every output sample, vectorized
-def _solve_many(bodies, joints, phidot, a_g, ge):
+def _solve_many(bodies, joints, phidot, a_g, ge, loads=None, *, with_phiddot: bool = False):
     """:func:`_solve` over n samples at once (phi'' the ninth unknown: the model's): ``bodies``
     = [(m, I, k)] with k a dict of arrays (n,) x, y, dx, dy, ddx, ddy, dtheta, ddtheta;
-    ``joints`` = [(px (n,), py (n,), [(body, sign)])]. Returns the joint forces (n, nj, 2)."""
+    ``joints`` = [(px (n,), py (n,), [(body, sign)])]; ``loads``: None or, per body, the known
+    external force and moment about its centre of mass (fx, fy, mz) (n,) [N, N m] (the
+    devices, :func:`_device_loads`). Returns the joint forces (n, nj, 2) (and phi'' (n,)
+    [rad/s^2] with ``with_phiddot``)."""
     nb, nj, n = len(bodies), len(joints), phidot.size
     M = np.zeros((n, 3 * nb, 2 * nj + 1))
     rhs = np.zeros((n, 3 * nb))
@@ -335,6 +346,11 @@ def _solve_many(bodies, joints, phidot, a_g, ge):
         M[:, r, -1] = -m * k["dx"]
         M[:, r + 1, -1] = -m * k["dy"]
         M[:, r + 2, -1] = -inertia * k["dtheta"]
+        if loads is not None:
+            fx, fy, mz = loads[i]
+            rhs[:, r] -= fx
+            rhs[:, r + 1] -= fy
+            rhs[:, r + 2] -= mz
     for j, (px, py, acting) in enumerate(joints):
         for i, sign in acting:
             k = bodies[i][2]
@@ -344,7 +360,80 @@ def _solve_many(bodies, joints, phidot, a_g, ge):
             M[:, r + 2, 2 * j] += -sign * (py - k["y"])
             M[:, r + 2, 2 * j + 1] += sign * (px - k["x"])
     x = np.linalg.solve(M, rhs[..., None])[..., 0]
+    if with_phiddot:
+        return x[:, :-1].reshape(n, nj, 2), x[:, -1]
     return x[:, :-1].reshape(n, nj, 2)
+
+
+def _device_loads(frame: Frame, devices, s: int, kin, phidot):
+    """The forces of a frame's intact devices on its bodies (left, beam, right) along a run,
+    as (fx, fy, mz) per body [N, N, N m] (mz about the body's centre of mass), in the state
+    of the mechanism rocking in direction ``s`` (``kin``: its configuration_many at the
+    samples; ``phidot`` [rad/s]).
+
+    Tendon of column j (central, unbonded, anchored at the foundation F_j, the rest position
+    of the column's base centre, and at the beam T_j, the rest position of its top centre):
+    elongation e_j = |P_j - F_j| + |T_j - Q_j| (P_j, Q_j the column's base and top centres
+    now) - exactly the model's base plus top opening, 2 b sin(|theta|/2) each - and tension
+    k e_j acting on the column at P_j towards F_j and at Q_j towards T_j, and on the beam at
+    T_j towards Q_j: their virtual work is -k e_j de_j, the model's K. Damper of column j: the
+    model's dashpot on the chord c_j = 4 b sin(|theta_j|/2) as a couple on the column,
+    M_j = -C (dc_j/dt) (dc_j/dtheta_j), with no resultant force: its virtual power is the
+    model's -D phi'^2 and it takes no side on where a real damper's force would reach the
+    contacts (module docstring)."""
+    n = phidot.size
+    k, c, b = devices.tendon_stiffness, devices.damping, frame.b
+    rest = mechanism_rest(frame, s)
+    beam = kin[1]
+    loads = [[np.zeros(n), np.zeros(n), np.zeros(n)] for _ in range(3)]
+    cb, sb = np.cos(beam["theta"]), np.sin(beam["theta"])
+    for j, h in ((0, 0.5 * frame.column_height_left), (2, 0.5 * frame.column_height_right)):
+        col, (gx0, gy0), (bx0, by0) = kin[j], rest[j], rest[1]
+        cc, sc = np.cos(col["theta"]), np.sin(col["theta"])
+        P = (col["x"] + sc * h, col["y"] - cc * h)            # G + R(theta) (0, -h)
+        Q = (col["x"] - sc * h, col["y"] + cc * h)            # G + R(theta) (0, +h)
+        F = (gx0, gy0 - h)
+        tx0, ty0 = gx0 - bx0, gy0 + h - by0                   # T in the beam's rest frame
+        T = (beam["x"] + cb * tx0 - sb * ty0, beam["y"] + sb * tx0 + cb * ty0)
+        dbx, dby = F[0] - P[0], F[1] - P[1]
+        dtx, dty = T[0] - Q[0], T[1] - Q[1]
+        eb, et = np.hypot(dbx, dby), np.hypot(dtx, dty)
+        tension = k * (eb + et)
+        # an end that has not opened pulls along the tendon's rest line (vertical)
+        ub = np.where(eb > 1e-12, dbx / np.where(eb > 1e-12, eb, 1.0), 0.0), \
+            np.where(eb > 1e-12, dby / np.where(eb > 1e-12, eb, 1.0), -1.0)
+        ut = np.where(et > 1e-12, dtx / np.where(et > 1e-12, et, 1.0), 0.0), \
+            np.where(et > 1e-12, dty / np.where(et > 1e-12, et, 1.0), 1.0)
+        fpx, fpy = tension * ub[0], tension * ub[1]           # on the column at P
+        fqx, fqy = tension * ut[0], tension * ut[1]           # on the column at Q
+        lc = loads[j]
+        lc[0] += fpx + fqx
+        lc[1] += fpy + fqy
+        lc[2] += (_cross_many(P[0] - col["x"], P[1] - col["y"], fpx, fpy)
+                  + _cross_many(Q[0] - col["x"], Q[1] - col["y"], fqx, fqy))
+        lb = loads[1]                                          # on the beam at T
+        lb[0] -= fqx
+        lb[1] -= fqy
+        lb[2] += _cross_many(T[0] - beam["x"], T[1] - beam["y"], -fqx, -fqy)
+        th, dth = col["theta"], col["dtheta"]
+        dc = 2.0 * b * np.cos(0.5 * np.abs(th)) * np.where(th >= 0.0, 1.0, -1.0)  # dc/dtheta
+        lc[2] += -c * dc * dth * phidot * dc
+    return [tuple(x) for x in loads]
+
+
+def _cross_many(rx, ry, fx, fy):
+    return rx * fy - ry * fx
+
+
+@lru_cache(maxsize=64)
+def _rest_of(frame: Frame, s: int) -> tuple[tuple[float, float], ...]:
+    kin = _dynamics(frame, s).mechanism.configuration_many(np.zeros(1))
+    return tuple((float(b["x"][0]), float(b["y"][0])) for b in kin)
+
+
+def mechanism_rest(frame: Frame, s: int) -> tuple[tuple[float, float], ...]:
+    """The bodies' centres of mass (x, y) [m] at rest (phi = 0), left, beam, right."""
+    return _rest_of(frame, s)
 
 
 def _demand_many(forces, surface):
@@ -359,8 +448,9 @@ def _demand_many(forces, surface):
     return d.max(axis=1)
 
 
-def _rocking_demand(structure, s, phi, phidot, a_g, ge):
-    """(base, beam) demands [-] of ``structure`` rocking in direction ``s`` at the samples."""
+def _rocking_demand(structure, s, phi, phidot, a_g, ge, devices=None):
+    """(base, beam) demands [-] of ``structure`` rocking in direction ``s`` at the samples,
+    with the intact ``devices`` of a frame (:func:`_device_loads`; None: free-standing)."""
     mech = _dynamics(structure, s).mechanism
     kin = mech.configuration_many(phi)
     n = phi.size
@@ -385,7 +475,8 @@ def _rocking_demand(structure, s, phi, phidot, a_g, ge):
     joints = [(np.full(n, A[0]), np.full(n, A[1]), [(0, 1.0)]),
               (B[0], B[1], [(1, 1.0), (0, -1.0)]), (C[0], C[1], [(1, 1.0), (2, -1.0)]),
               (np.full(n, D[0]), np.full(n, D[1]), [(2, 1.0)])]
-    f = _solve_many(bodies, joints, phidot, a_g, ge)
+    loads = None if devices is None else _device_loads(structure, devices, s, kin, phidot)
+    f = _solve_many(bodies, joints, phidot, a_g, ge, loads)
     base = _demand_many(f[:, [0, 3]], np.zeros((n, 2)))
     th_b = np.repeat(beam["theta"][:, None], 2, axis=1)
     return base, _demand_many(f[:, [1, 2]], th_b)
@@ -402,9 +493,8 @@ def demand_history(scene, t, phi, phidot, mode, intact, a_g, a_v=0.0, *,
 
     At rest: |a_g| / (g + a_v) for every contact; rocking: the Newton-Euler contact forces of
     the mechanism with the model's phi'' (:func:`block_reactions`, :func:`frame_reactions`,
-    vectorized); inf where a contact opens. NaN where it is not computed: g + a_v <= 0 (no
-    contact; the model ends there) and, while a hybrid frame rocks with its devices intact,
-    everywhere (module docstring).
+    vectorized; a hybrid frame's intact devices as loads, module docstring); inf where a
+    contact opens. NaN where g + a_v <= 0 (no contact; the model ends there).
     """
     t = np.asarray(t, dtype=float)
     n = t.size
@@ -423,14 +513,19 @@ def demand_history(scene, t, phi, phidot, mode, intact, a_g, a_v=0.0, *,
         base[rest] = np.abs(a_g[rest]) / ge[rest]
     if frame:
         beam[rest] = base[rest]
-    free = ~intact if scene.has_devices else np.ones(n, dtype=bool)
+    devices = scene.devices if scene.has_devices else None
     for s in (1, -1):
-        idx = np.flatnonzero(on & (mode == s) & free)
-        if idx.size:
-            b, m = _rocking_demand(structure, s, phi[idx], phidot[idx], a_g[idx], ge[idx])
-            base[idx] = b
-            if frame:
-                beam[idx] = m
+        for with_devices in ((False, True) if devices is not None else (False,)):
+            sel = on & (mode == s)
+            if devices is not None:
+                sel &= intact if with_devices else ~intact
+            idx = np.flatnonzero(sel)
+            if idx.size:
+                b, m = _rocking_demand(structure, s, phi[idx], phidot[idx], a_g[idx], ge[idx],
+                                       devices if with_devices else None)
+                base[idx] = b
+                if frame:
+                    beam[idx] = m
     return pd.DataFrame({"t": t, "base": base, "beam": beam})
 
 

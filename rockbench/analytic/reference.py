@@ -12,7 +12,6 @@ import math
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..scene.scene import Scene
 from .dynamics import Dynamics
@@ -47,6 +46,29 @@ CONSTANTS: dict[str, tuple[str, str]] = {
     "r_BC_cw": ("m", "beam centre of mass from the pivot, clockwise"),
     "psi_BC_cw": ("rad", "angle of r_BC, clockwise"),
 }
+
+
+def _sinusoid_root(f, lim: float) -> float | None:
+    """The first root in (0, ``lim``) of ``f`` [N m] (inf when there is none) when ``f`` is one
+    sinusoid, f(x) = a cos x + b sin x with a = f(0) > 0: the gravity term of a free-standing
+    block (its centre of mass turns about the pivot) or of a frame whose columns stay parallel
+    (every body turns about a fixed point, or translates along a circle, at the rate phi'), whose
+    root is x = atan2(b, a) + pi/2. a and b are read at x = 0 and x = d; the form is accepted
+    only when it predicts f at two other angles to 1e-9 of |f(0)| and the root's residual is as
+    small (None otherwise: tendons, an asymmetric linkage)."""
+    a = f(0.0)
+    if not (math.isfinite(a) and a > 0.0):
+        return None
+    d = min(0.25, 0.5 * lim)
+    b = (f(d) - a * math.cos(d)) / math.sin(d)
+    tol = 1e-9 * a
+    for x in (1.5 * d, 2.0 * d):
+        if not abs(f(x) - (a * math.cos(x) + b * math.sin(x))) <= tol:
+            return None
+    root = math.atan2(b, a) + 0.5 * math.pi
+    if root >= lim:
+        return math.inf if f(lim) > 0.0 else None
+    return root if abs(f(root)) <= tol else None
 
 
 @functools.lru_cache(maxsize=128)
@@ -89,11 +111,22 @@ class Reference:
         f = lambda x: self.strain(s * x) - eps  # noqa: E731
         if f(lim) < 0:
             return math.inf
+        from scipy.optimize import brentq
+
         return brentq(f, 0.0, lim, xtol=1e-14, rtol=1e-13)
 
     def _critical_angle(self, s: int, intact: bool) -> float:
         """First |phi| > 0 where dV/dphi vanishes (gravity + intact tendons), inf if none before
-        the fall angle."""
+        the fall angle: in closed form when dV/dphi is one sinusoid (:func:`_sinusoid_root`),
+        else by a scan and Brent's method (:meth:`_searched_critical_angle`)."""
+        dyn, lim = self.dyn[s], self.fall[s]
+        f = lambda x: s * dyn.potential_gradient(s * x, intact)  # noqa: E731
+        root = _sinusoid_root(f, lim)
+        return root if root is not None else self._searched_critical_angle(s, intact)
+
+    def _searched_critical_angle(self, s: int, intact: bool) -> float:
+        """:meth:`_critical_angle` by a scan of 400 steps to the fall angle and Brent's method
+        on the first sign change (any mechanism, any tendon)."""
         dyn, lim = self.dyn[s], self.fall[s]
         f = lambda x: s * dyn.potential_gradient(s * x, intact)  # noqa: E731
         xs = np.linspace(0.0, lim, 400)[1:]
@@ -101,6 +134,8 @@ class Reference:
         for x in xs:
             v = f(x)
             if prev > 0 >= v:
+                from scipy.optimize import brentq
+
                 return brentq(f, prev_x, x, xtol=1e-14, rtol=1e-13)
             prev_x, prev = x, v
         return math.inf

@@ -53,8 +53,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from ..constants import G
 from ..errors import ParameterError, check_positive, check_range
@@ -255,6 +253,8 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
             excess = ((lambda tt: float(acc(tt)) - thr * float(gfac(tt))) if s == 1
                       else (lambda tt: thr * float(gfac(tt)) - float(acc(tt))))
         lo, hi = float(ks[i - 1]), float(ks[i])
+        from scipy.optimize import brentq     # here: a map's compiled path never needs it
+
         tu = brentq(excess, lo, hi, xtol=1e-13, rtol=1e-14)
         # step just past the root so that the excess is strictly positive (the increments
         # double, so this ends in a few dozen evaluations at most, at hi if not before)
@@ -354,6 +354,8 @@ def simulate(scene: Scene, motion=None, *, duration: float | None = None, phi0: 
         names.append("peak")
 
         try:
+            from scipy.integrate import solve_ivp   # here: the compiled path never needs it
+
             sol = solve_ivp(rhs, (t, t_end), (phi, phid), method=ivp_method,
                             rtol=settings.rtol, atol=settings.atol, events=evs, dense_output=True)
         except (ValueError, ArithmeticError, RuntimeError) as exc:

@@ -20,14 +20,16 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
                full: bool = False, workers: int | None = None,
                progress: bool = False, scene: Any = None,
                stress_scene: Any = None, stress_hybrid: Any = None,
-               evidence: str = "quick") -> dict[str, Any]:
+               evidence: str = "quick", vertical: float = 0.0) -> dict[str, Any]:
     """{"decision": the search's Decision (or None with no engine), "tradeoff": its evidence
     table, "advice": its advice table (:func:`rockbench.studies.advise.advice_table`),
     "evidence": the size, "scene": the scene's name, "stress": table or None, "breaks": the
     first breaking point of each engine along each axis or None, the stability sweep's
     labels}. ``evidence``: the plan's ``choice_evidence`` (``full`` takes the next larger one,
     ``quick`` the quick one); ``engines``: the engines that run (the others are listed by the
-    search with their state)."""
+    search with their state); ``vertical``: r, the evidence's vertical motion (a_v = r x
+    horizontal; the stability sweep stays horizontal: its axes are the structure's and the
+    engines')."""
     from ..scene.scene import load_scene
     from ..studies.advise import advice_table
     from ..studies.robustness import AXES, axis_label, base_values, breaking_points, stress
@@ -43,7 +45,8 @@ def run_choice(engines: Sequence[str], store: Path, *, quick: bool = False,
     decision = None
     if names:
         decision = search(scene, TOLERANCE_LADDER, names, size=size,
-                          store=Path(store) / "search", workers=workers, progress=progress)
+                          store=Path(store) / "search", workers=workers, progress=progress,
+                          vertical=vertical)
     sw = None if quick or not names else stress(names, full=full, workers=workers,
                                                 progress=progress, scene=stress_scene,
                                                 hybrid=stress_hybrid)

@@ -133,7 +133,7 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
                       records: Any = None, size: str = "default",
                       store: str | os.PathLike | None = None,
                       numerical: Any = "measure", export_dir: str | os.PathLike | None = None,
-                      **run: Any) -> dict[str, Any]:
+                      vertical: float | None = None, **run: Any) -> dict[str, Any]:
     """The fragility section of the default campaign: for each frame (``frames``: label ->
     scene) the runs and the analysis of :func:`run_fragility` over ``records`` (default: the
     size's ensemble, ``synthetic``: :data:`REPORT_SIZES`) on a ladder found per frame (module
@@ -141,7 +141,9 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
     code fingerprint; without one, a temporary folder for the section's own reuse).
     ``numerical``: as :func:`run_fragility` ("measure": each engine's error on the frame at
     its setting). ``export_dir``: where the fitted curves are written for OpenQuake and
-    pelicun (:func:`write_exports`; default ``store/export``; none without a store). ``run``:
+    pelicun (:func:`write_exports`; default ``store/export``; none without a store).
+    ``vertical``: as :func:`run_fragility` (records without a vertical channel of their own
+    move the ground vertically by this ratio; None: the recorded channels only). ``run``:
     executor options (``executor``, ``workers``, ``scheduler``, ``progress``). Returns
     ``{"what": sentence, "ensemble": the ensemble's description
     (:func:`rockbench.studies.ensembles.describe_ensemble`), "frames": [{"label", "scene",
@@ -165,7 +167,7 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
                 store = stack.enter_context(tempfile.TemporaryDirectory(prefix="rb-frag-"))
             recs = resolve_records(records, cache=Path(store) / "records")
             median_pga = float(np.median(record_ims(recs)["pga"]))
-            opts = dict(run, store=store)
+            opts = dict(run, store=store, vertical=vertical)
             for label, scene in frames.items():
                 ladder, e_ladder = _ladder(scene, recs, median_pga, cfg, opts)
                 f = run_fragility(scene, recs, engines=[REFERENCE, *engs], scales=ladder,

@@ -89,10 +89,12 @@ def _axes(maps: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
 
 
 def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: bool,
-                quick: bool, run: dict, maps: Mapping[str, Any]
+                quick: bool, run: dict, maps: Mapping[str, Any], vertical: float = 0.0
                 ) -> tuple[pd.DataFrame | None, tuple[int, int], str]:
-    """One engine's map of ``sc``: (map or None, grid, where it comes from)."""
-    axes = _axes(maps)[1]
+    """One engine's map of ``sc``: (map or None, grid, where it comes from). With a vertical
+    part (``vertical`` r > 0) no measured map applies (they are horizontal): the fast
+    engines' maps are computed now."""
+    axes = dict(_axes(maps)[1], vertical=vertical)
     lab = scene_label(sc)
     if quick:           # a first look: the fast engines' maps only, on 4 x 4 x 4 cells
         if not is_fast(eng):
@@ -101,15 +103,17 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
         return (run_map(sc, eng, store=map_store_path(store, lab, eng, "4x4"),
                         **dict(axes, grid=g), **run), g, "computed now")
     why = "no measured map"
-    if measured is not None:
+    if vertical:
+        why = "the measured maps are of horizontal pulses"
+    elif measured is not None:
         # the finest verified map first: the paper's resolution (measured adaptively by
         # --full), then the plan's measured grid
         fg, mg = tuple(maps.get("full_grid", maps["measured_grid"])), tuple(maps["measured_grid"])
         whys = []
         for g in dict.fromkeys((fg, mg)):
             path = map_store_path(measured, lab, eng, f"{g[0]}x{g[1]}")
-            df, w = reuse_map(path, sc, eng, **dict(axes, grid=g),
-                              workers=run.get("workers"))
+            horizontal = {k: v for k, v in axes.items() if k != "vertical"}
+            df, w = reuse_map(path, sc, eng, **horizontal, grid=g, workers=run.get("workers"))
             if df is not None and not (full and g != fg):   # --full wants the finest
                 return df, g, w
             whys.append(w)
@@ -131,16 +135,18 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
 
 def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: bool = False,
              measured: Path | None = None, progress: bool = True, workers: int | None = None,
-             scheduler: str | None = None, maps: Mapping[str, Any] | None = None
-             ) -> dict[str, Any]:
+             scheduler: str | None = None, maps: Mapping[str, Any] | None = None,
+             vertical: float = 0.0) -> dict[str, Any]:
     """Run the map part; return {"analytic": {scene: frame}, "engine": {(scene, engine):
     frame}, "overlay_ref": {(scene, grid): frame}, "agreement": frame, "words": [str],
     "provenance": [str]}. ``measured``: the folder of the measured engine maps (the plan's
     ``measured_grid``), reused when verified, (re)measured with ``full``. ``maps``: the plan's
     maps part (default: the paper plan's, ``scenarios/paper-plan.toml``); scenes are keyed by
-    their label (:func:`scene_label`)."""
+    their label (:func:`scene_label`). ``vertical``: r, every pulse's vertical part
+    a_v = r u_g'' (in phase; :func:`rockbench.studies.maps.run_map`)."""
     maps = dict(_paper_maps() if maps is None else maps)
     grid_a, axes = _axes(maps)
+    grid_a, axes = dict(grid_a, vertical=vertical), dict(axes, vertical=vertical)
     run = dict(progress=progress, workers=workers, scheduler=scheduler)
     out: dict[str, Any] = {"analytic": {}, "engine": {}, "overlay_ref": {}, "words": [],
                            "provenance": []}
@@ -160,7 +166,7 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
             if eng == "analytic":
                 continue
             df, g, source = _engine_map(sc, eng, store, measured, full=full, quick=quick,
-                                        run=run, maps=maps)
+                                        run=run, maps=maps, vertical=vertical)
             out["provenance"].append(f"{eng} on {lab}: " + (
                 f"{g[0]}x{g[1]}x4 cells, {source}" if df is not None else
                 f"no map ({source}; `rockbench report --full` measures it)"))
@@ -171,7 +177,7 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
             if key not in out["overlay_ref"]:
                 out["overlay_ref"][key] = mark_near_boundary(run_map(
                     sc, "analytic", store=map_store_path(store, lab, "analytic", f"{g[0]}x{g[1]}"),
-                    **cells, **run), sc, tail=axes["tail"],
+                    **cells, **run), sc, tail=axes["tail"], vertical=vertical,
                     parallel=run.get("workers") != 1)
             ref = out["overlay_ref"][key]
             out["engine"][(lab, eng)] = df

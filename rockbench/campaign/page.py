@@ -90,6 +90,27 @@ def _write_runtime(timings: dict[str, tuple[float, float]], path: Path) -> None:
                   for k, (w, c) in timings.items()]).to_csv(path, index=False)
 
 
+def _render_apart(jobs: dict[str, tuple[Any, tuple, dict]]):
+    """Start rendering ``jobs`` (key -> (function, args, kwargs), each returning a page
+    block's HTML) in one spawned process, unless the machine has a single core; return a
+    function that waits for them and gives key -> HTML. The child's CPU is counted with this
+    process's once it has ended (:func:`rockbench.machine.tree_cpu_s`)."""
+    if cpu_count() < 2 or not jobs:
+        return lambda: {k: f(*a, **kw) for k, (f, a, kw) in jobs.items()}
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ex = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+    futures = {k: ex.submit(f, *a, **kw) for k, (f, a, kw) in jobs.items()}
+
+    def wait() -> dict[str, str]:
+        try:
+            return {k: fu.result() for k, fu in futures.items()}
+        finally:
+            ex.shutdown(wait=True, cancel_futures=True)
+    return wait
+
+
 def write_page(t: Any, out: Path) -> Path:
     """Write ``out/index.html`` (and its figures under ``out/figures``) from a campaign's
     tables ``t``; return the page's path."""
@@ -103,6 +124,26 @@ def write_page(t: Any, out: Path) -> Path:
     plan, choice, maps = t.plan, t.choice, t.maps
     decision = choice.get("decision")
     scene_word = choice.get("scene", "the structure")
+    mp = plan["maps"]
+    g = (12, 12) if t.quick else mp["analytic_grid"]           # what run_maps ran
+    # the maps', validity and fragility figures render in a process of their own while this
+    # one renders the others (figures are the page's cost; each block reads its own tables)
+    apart = {"maps-section": ("Overturning maps" + (" (paper Figs. 4-7)" if t.paper else ""),
+                              maps_html, (maps, out / "figures"), dict(
+        analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
+                      f"W in {mp['analytic_frequency']}, {describe('pulse')}",
+        axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, "
+             f"{describe('pulse', mp['engine_tail'])}", paper=t.paper))}
+    if t.validity:
+        from ..report.validity_figures import validity_html
+        apart["validity-section"] = ("Where the analytic model holds", validity_html,
+                                     (t.validity, out / "figures"), {})
+    if t.fragility:
+        from ..report.fragility_figures import fragility_html
+        apart["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)"
+                                                                  if t.paper else ""),
+                                      fragility_html, (t.fragility, out / "figures"), {})
+    pending = _render_apart({k: v[1:] for k, v in apart.items()})
     lines = campaign_conclusion(t.engines, t.metrics, t.eta_summary, t.speed, t.records,
                                 hybrid=_hybrid(plan["scenes"], t.labels),
                                 noun="frames" if _all_frames(plan["scenes"]) else "structures")
@@ -113,26 +154,8 @@ def write_page(t: Any, out: Path) -> Path:
     lines = words + maps["words"] + lines
     sections = P.page_sections(t, lines, out / "figures", engine_versions=_engine_versions(),
                                files=list(t.files()))
-    mp = plan["maps"]
-    g = (12, 12) if t.quick else mp["analytic_grid"]           # what run_maps ran
     sections["choice-section"] = ("Choosing a modelling approach",
                                   choice_html(choice, out / "figures", with_work_precision=False))
-    sections["maps-section"] = (
-        "Overturning maps" + (" (paper Figs. 4-7)" if t.paper else ""), maps_html(
-            maps, out / "figures",
-            analytic_grid=f"{g[0]} x {g[1]} cells per panel, A in {mp['analytic_amplitude']}, "
-                          f"W in {mp['analytic_frequency']}, {describe('pulse')}",
-            axes=f"A in {mp['engine_amplitude']}, W in {mp['engine_frequency']}, "
-                 f"{describe('pulse', mp['engine_tail'])}", paper=t.paper))
-    if t.validity:
-        from ..report.validity_figures import validity_html
-        sections["validity-section"] = ("Where the analytic model holds",
-                                        validity_html(t.validity, out / "figures"))
-    if t.fragility:
-        from ..report.fragility_figures import fragility_html
-        sections["fragility-section"] = ("Fragility over records" + (" (paper Fig. 9)"
-                                                                     if t.paper else ""),
-                                         fragility_html(t.fragility, out / "figures"))
     sections["decision-section"] = ("Which engine and settings", decision_html(
         choice["advice"], scene=scene_word, structure=plan.get("description", ""),
         structures=None if t.paper else structure_table(plan["scenes"]),
@@ -143,6 +166,8 @@ def write_page(t: Any, out: Path) -> Path:
                                          coverage=decision.coverage if decision else None,
                                          cpu_s=decision.cpu_s if decision else None)] if n],
         work_precision_html=work_precision_html(choice, out / "figures", scene=scene_word)))
+    for key, html in pending().items():
+        sections[key] = (apart[key][0], html)
     timings = dict(t.timings, report=(time.perf_counter() - w0, tree_cpu_s() - c0))
     total = (time.perf_counter() - t.t_start, tree_cpu_s() - t.cpu_start)
     sections["runtime-section"] = ("Run time", P.runtime_html(timings, total, cpu_count()))

@@ -30,28 +30,36 @@ __all__ = ["PARTS", "LANES"]
 def _part_comparisons(c: dict[str, Any]) -> list[dict[str, Any]]:
     """1 + 2: the pulse cases, the fracture cases and free rocking of every scene."""
     plan, names = c["plan"], c["names"]
+    vr = _vertical(plan)
     jobs = []
     shapes = {(shape, int(sign)) for shape, sign in plan["pulse_shapes"]}
     for scene in plan["scenes"]:
-        mirror = _mirror_symmetric(scene)
+        mirror = _mirror_symmetric(scene) and not vr    # a vertical part turns with the sign
         for (A, W) in plan["pulse_points"]:
             for shape, sign in plan["pulse_shapes"]:
                 if mirror and int(sign) == -1 and (shape, 1) in shapes:
                     continue      # the mirror image of the +1 case (Scene.mirror_symmetric)
                 jobs.append({"kind": "pulse", "scene": scene, "engines": names,
                              "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
-                                        "A": float(A), "W": float(W)},
+                                        "A": float(A), "W": float(W), **vr},
                              "duration": pulse_run_length(W, _p(scene),
                                                           plan["pulse_tail"])})
     for scene, shape, sign, A, W in plan["fracture_cases"]:
         jobs.append({"kind": "fracture", "scene": scene, "engines": names,
                      "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
-                                "A": float(A), "W": float(W)},
+                                "A": float(A), "W": float(W), **vr},
                      "duration": pulse_run_length(W, _p(scene), plan["pulse_tail"])})
     for scene in plan["scenes"]:
         jobs.append({"kind": "free", "scene": scene, "engines": names, "motion": None,
                      "phi0_over_alpha": plan["free_phi0"], "duration": plan["free_duration"]})
     return _comparisons(jobs, cache=c["cache"], desc="comparisons", **c["run"])
+
+
+def _vertical(plan: Any) -> dict[str, float]:
+    """The motion-spec entry of the plan's vertical ratio (``vertical``: a_v = r x the
+    horizontal acceleration, in phase), empty without one."""
+    r = float(plan.get("vertical", 0.0) or 0.0)
+    return {"vertical_ratio": r} if r else {}
 
 
 def _p(scene: Any) -> float:
@@ -74,7 +82,8 @@ def _part_speed(c: dict[str, Any]) -> list[dict[str, Any]]:
     dc = plan["dt_case"]
     dur = pulse_run_length(dc["W"], _p(dc["scene"]), plan["dt_tail"])
     jobs = [{"kind": "dt", "scene": dc["scene"], "engine": e, "dt": float(dt),
-             "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")}},
+             "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")},
+                        **_vertical(plan)},
              "duration": dur}
             for e in c["names"] if e != REFERENCE for dt in plan["dt_sweep"]]
     return _comparisons(jobs, cache=c["cache"], desc="time steps", **c["run"])
@@ -89,7 +98,8 @@ def _part_maps(c: dict[str, Any]) -> dict[str, Any]:
                     quick=c["quick"], measured=c["out"] / "engine-maps",
                     progress=run["progress"], workers=run["workers"],
                     scheduler=run["dask_address"] if run["executor"] == "dask" else None,
-                    maps=c["plan"]["maps"])
+                    maps=c["plan"]["maps"],
+                    vertical=_vertical(c["plan"]).get("vertical_ratio", 0.0))
 
 
 def _part_choice(c: dict[str, Any]) -> dict[str, Any]:
@@ -101,7 +111,8 @@ def _part_choice(c: dict[str, Any]) -> dict[str, Any]:
                       workers=run["workers"], progress=run["progress"],
                       scene=plan["choice_scene"], stress_scene=plan.get("stress_scene"),
                       stress_hybrid=plan.get("stress_hybrid_scene"),
-                      evidence=plan.get("choice_evidence", "quick"))
+                      evidence=plan.get("choice_evidence", "quick"),
+                      vertical=_vertical(plan).get("vertical_ratio", 0.0))
 
 
 def _part_records(c: dict[str, Any]) -> tuple[pd.DataFrame, list[str]]:
@@ -126,13 +137,15 @@ def _part_fragility(c: dict[str, Any]) -> dict[str, Any]:
                              store=S.store_path(c["store_dir"], "fragility", keyed=False),
                              export_dir=c["out"] / "fragility-export",
                              executor=run["executor"], workers=run["workers"],
-                             scheduler=run["dask_address"], progress=run["progress"])
+                             scheduler=run["dask_address"], progress=run["progress"],
+                             vertical=_vertical(c["plan"]).get("vertical_ratio"))
 
 
 def _part_validity(c: dict[str, Any]) -> dict[str, Any]:
     """8: where the analytic model holds (a user's scene with its own friction)."""
     return _validity_section(c["plan"].get("validity_map"), c["names"], c["store_dir"],
-                             c["run"]["workers"], c["run"]["progress"])
+                             c["run"]["workers"], c["run"]["progress"],
+                             _vertical(c["plan"]).get("vertical_ratio", 0.0))
 
 
 #: The parts of a campaign, in the order of the page's run-time table.
@@ -141,15 +154,17 @@ PARTS = {"comparisons": _part_comparisons, "speed": _part_speed, "maps": _part_m
           "validity map": _part_validity}
 #: The two lanes of the local executor (the first in this process), each part's CPU measured
 #: on the paper's plan (runtime.csv) so that both lanes end near together.
-LANES = [["comparisons", "speed", "records", "validity map"],
-          ["maps", "choice", "fragility"]]
+LANES = [["comparisons", "records", "fragility", "validity map"],
+          ["maps", "choice", "speed"]]
 
 
 def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], store_dir: Path,
-                      workers: int | None, progress: bool) -> dict[str, Any]:
+                      workers: int | None, progress: bool,
+                      vertical: float = 0.0) -> dict[str, Any]:
     """The validity map of the plan's ``validity_map`` (``scene``, ``grid`` n, ``tail`` [s];
-    None: none) with the campaign's engines, as the page's section wants it
-    (:func:`rockbench.report.validity_figures.validity_html`); {} without one."""
+    None: none) with the campaign's engines and the plan's vertical ratio, as the page's
+    section wants it (:func:`rockbench.report.validity_figures.validity_html`); {} without
+    one."""
     if not spec:
         return {}
     from ..scene import load_scene
@@ -160,17 +175,31 @@ def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], stor
     engines = [e for e in names if e != REFERENCE]
     out = {"scene": scene.name, "friction": friction_of(scene), "tolerance": 0.10,
            "a_mu": friction_of(scene) / math.tan(scene.alpha),
-           "engines": engines, "shape": "symmetric", "sign": 1, "tail": spec["tail"]}
+           "engines": engines, "shape": "symmetric", "sign": 1, "tail": spec["tail"],
+           "vertical": vertical}
     if not engines:
         return dict(out, error="no engine ran in this campaign")
     A, W = default_axes(scene, int(spec["grid"]))
     try:
         frame = validity_map(scene, A=A, W=W, engines=engines, tolerance=out["tolerance"],
                              tail=spec["tail"], workers=workers, progress=progress,
+                             vertical_ratio=vertical,
                              store=store_dir if S.have_pyarrow() else None)
     except Exception as e:  # noqa: BLE001 - the page says it, the rest of the report stands
         return dict(out, error=f"{type(e).__name__}: {e}")
     return dict(out, frame=frame)
+
+
+def _record_vertical(rec: Mapping[str, Any], plan: Mapping[str, Any]) -> dict[str, Any]:
+    """The motion-spec entries of a record's vertical motion: its own vertical channel (a
+    records.csv column ``vertical``), else the plan's ratio (a_v = r x the horizontal), else
+    none."""
+    if rec.get("vertical") is not None:
+        return {k: v for k, v in (("vertical_path", str(rec["vertical"])),
+                                  ("vertical_dt", rec.get("vertical_dt")),
+                                  ("vertical_units", rec.get("vertical_units")))
+                if v is not None}
+    return _vertical(plan)
 
 
 def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],
@@ -178,7 +207,8 @@ def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],
     """``rows`` (record peaks) with the analytic model's sensitivity band of each (record,
     scene, polarity) and where each backend's peak stands against it (columns band_*,
     within_band; :mod:`rockbench.studies.sensitivity`). ``durations``: run length [s] per record path
-    (None: the default); ``meta``: dt and units per path of a headerless record."""
+    (None: the default); ``meta``: per path, the dt and units of a headerless record and its
+    vertical motion (:func:`_record_vertical`)."""
     from ..scene import load_scene
     from ..scene.motion import motion_from_spec
     from ..studies.sensitivity import band
@@ -235,6 +265,7 @@ def _records(records_dir, plan: Mapping[str, Any], names: list[str], notes: list
                 m = {"kind": "record", "path": rec["path"], "scale": pol}
                 if rec["dt"] is not None:
                     m.update(dt=rec["dt"], units=rec["units"])
+                m.update(_record_vertical(rec, plan))
                 for e in names:
                     rec_cases.append({"scene": scene, "engine": e, "motion": m,
                                       "duration": rec_duration})

@@ -38,7 +38,7 @@ from typing import Any, Sequence
 from ..errors import ParameterError, SceneError
 
 __all__ = ["plan_for_scenes", "load_plan", "scene_refs", "structure_table", "campaign_plan",
-           "read_plan"]
+           "read_plan", "every_scene"]
 
 _SHAPES = (("symmetric", 1), ("symmetric", -1), ("antisymmetric", 1), ("antisymmetric", -1))
 
@@ -182,6 +182,18 @@ def _read_plan_file(path: str | os.PathLike) -> dict[str, Any]:
         raise ParameterError("plan", str(path), "a valid TOML plan file", str(e)) from None
 
 
+def every_scene(plan: dict[str, Any]) -> list[str]:
+    """Every scene a plan runs, in order of first use: the compared scenes, the fracture
+    cases', the record frames', the maps' (analytic and engines'), the decision's and the
+    stability sweep's (the paper's plan: its seven frames)."""
+    m = plan.get("maps", {})
+    refs = [*plan["scenes"], *(c[0] for c in plan.get("fracture_cases", ())),
+            *plan.get("record_frames", {}).values(), *m.get("analytic_scenes", ()),
+            *m.get("engine_scenes", ()), plan.get("choice_scene"), plan.get("stress_scene"),
+            plan.get("stress_hybrid_scene")]
+    return list(dict.fromkeys(str(r) for r in refs if r))
+
+
 def plan_file_scenes(path: str | os.PathLike) -> list[str]:
     """The scenes of a plan file (relative ``.toml`` paths made absolute), after checking the
     whole file (:func:`rockbench.campaign.plan_schema.check_plan`)."""
@@ -277,6 +289,7 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
             "fracture_cases": _pairs(c.get("fracture_cases", ()), (str, str, int, float, float)),
             "choice_scene": str(c.get("choice_scene", c["scenes"][0])),
             "choice_evidence": str(c.get("choice_evidence", "quick")),
+            "vertical": float(c.get("vertical", 0.0)),
             "stress_scene": c.get("stress_scene"),
             "stress_hybrid_scene": c.get("stress_hybrid_scene"),
             "maps": _maps_plan(c.get("maps", {}), c),

@@ -146,6 +146,11 @@ def phi0(v: Any) -> None:
     _number(v, 0.0, 10.0, what="an initial rotation phi0 / alpha [-]")
 
 
+def vertical(v: Any) -> None:
+    _number(v, 0.0, 3.0, lo_open=False,
+            what="a vertical ratio a_v / a_g [-] (limit vertical_ratio)")
+
+
 def fracture_cases(v: Any) -> None:
     for r in _list(v, "[scene, shape, sign, A, W] cases", empty=True):
         r = _list(r, "[scene, shape, sign, A, W]")
@@ -277,6 +282,11 @@ KEYS: tuple[PlanKey, ...] = (
     PlanKey("campaign", "choice_evidence", "", '"quick", "default" or "full"',
             '"default" ("quick" for the paper\'s plan)',
             "the validation set the advice is chosen and confirmed on", evidence),
+    PlanKey("campaign", "vertical", "-", "[0, 3]", "0 (horizontal only)",
+            "every pulse and record of the campaign (comparisons, speed sweep, maps, "
+            "evidence, records, fragility, validity map) also moves the ground vertically: "
+            "a_v = vertical x its horizontal acceleration, in phase (a record with a vertical "
+            "channel of its own keeps it; the stability sweep stays horizontal)", vertical),
     PlanKey("campaign", "stress_scene", "", "a scene", "the first scene",
             "the base of the stability sweep (rockbench stress)", optional_scene),
     PlanKey("campaign", "stress_hybrid_scene", "", "a scene with devices", "none",

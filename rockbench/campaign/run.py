@@ -275,7 +275,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
                  executor: str = "process", dask_address: str | None = None,
                  workers: int | None = None, full: bool = False,
                  scenes: Sequence[Any] | None = None,
-                 plan: str | os.PathLike | Mapping[str, Any] | None = None) -> Path:
+                 plan: str | os.PathLike | Mapping[str, Any] | None = None,
+                 vertical: float | None = None) -> Path:
     """Run a campaign and write its report; return the path of ``out_dir/index.html``.
 
     Parameters
@@ -303,13 +304,16 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         (:func:`rockbench.campaign.plan.plan_for_scenes`). Default: the paper's plan.
     plan : a plan file (``kind = "campaign-plan"``, :func:`rockbench.campaign.plan.load_plan`)
         or a plan mapping; overrides ``scenes``.
+    vertical : r in [0, 3]: every pulse and record of the campaign also moves the ground
+        vertically, a_v = r x its horizontal acceleration (in phase); overrides the plan's
+        ``vertical`` (None: the plan's, 0 by default).
     """
     from .page import write_page
 
     t = measure_campaign(out_dir, engines=engines, records_dir=records_dir, quick=quick,
                          progress=progress, store=store, executor=executor,
                          dask_address=dask_address, workers=workers, full=full, scenes=scenes,
-                         plan=plan)
+                         plan=plan, vertical=vertical)
     out = Path(out_dir)
     write_tables(t, out)
     return write_page(t, out)
@@ -341,8 +345,8 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
                      executor: str = "process", dask_address: str | None = None,
                      workers: int | None = None, full: bool = False,
                      scenes: Sequence[Any] | None = None,
-                     plan: str | os.PathLike | Mapping[str, Any] | None = None
-                     ) -> CampaignTables:
+                     plan: str | os.PathLike | Mapping[str, Any] | None = None,
+                     vertical: float | None = None) -> CampaignTables:
     """Run every part of a campaign (:func:`run_campaign`'s parameters) and return what it
     measured."""
     from ..engines import check_required, engine_states
@@ -352,6 +356,9 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
 
     cpu_start = tree_cpu_s()
     check_options(executor, workers, dask_address)
+    if vertical is not None:
+        from ..studies.map_cells import check_vertical_ratio
+        vertical = check_vertical_ratio(vertical, "vertical")
     check_required()              # ROCKBENCH_REQUIRE_ENGINES: a missing engine is an error
     # every registered engine has a state, decided once: ran, not installed (why, remedy),
     # left out by --engine; the page, the decision and the command's last lines show it
@@ -375,7 +382,10 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
         plan = plan_for_scenes(scenes, quick=quick, folder=out / "scenes")
     else:
         plan = campaign_plan(quick)
-    paper = plan["scenes"] == campaign_plan(quick)["scenes"]
+    if vertical is not None:
+        plan = dict(plan, vertical=vertical)
+    paper = (plan["scenes"] == campaign_plan(quick)["scenes"]
+             and not plan.get("vertical"))
     store_dir = Path(store) if store is not None else S.default_store(out)
     fingerprint = code_fingerprint()
     cache = S.store_path(store_dir, "comparisons")

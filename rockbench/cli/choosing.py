@@ -14,7 +14,7 @@ from typing import Any
 from ..constants import DT_LADDER
 from ..errors import ParameterError
 
-from .common import engine_names, load_scene_from
+from .common import add_vertical_option, engine_names, load_scene_from, vertical_ratio
 
 __all__ = ["add_choosing_commands", "cmd_tradeoff", "cmd_advise", "cmd_stress"]
 
@@ -68,6 +68,7 @@ def add_choosing_commands(sub) -> None:
                         "its own held-out error")
     p.add_argument("--full", action="store_true",
                    help="the full evidence and the search of the contact parameters (slow)")
+    add_vertical_option(p, "every pulse and record of the evidence")
     p.add_argument("--budget", type=arg_positive, metavar="CPU_S",
                    help="the most CPU seconds the search may spend (default: 120 quick, 600 "
                         "default, none --full); beyond it the answer says what to run next")
@@ -175,8 +176,9 @@ def cmd_advise(args: argparse.Namespace) -> int:
     if args.quick and full:
         raise ParameterError("--quick", True, "not together with --full")
     store = args.store or str(Path("advice") / Path(args.scene).stem)
+    vertical = vertical_ratio(args)
     a = advise(scene, args.tolerance, engine_names(args), store, quick=args.quick,
-               full=full, progress=not args.quiet,
+               full=full, progress=not args.quiet, vertical=vertical,
                budget_cpu_s=args.budget if args.budget is not None else "auto",
                **_executor(args))
     if args.json:

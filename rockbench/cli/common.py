@@ -24,7 +24,8 @@ from ..errors import ParameterError, RecordError, RockbenchError, RockbenchWarni
 
 __all__ = ["CommandLineError", "Parser", "add_setting_option", "add_engine_option",
            "add_quiet_option", "add_scene_options", "add_motion_options", "add_run_options",
-           "arg_number", "arg_positive", "arg_nonzero", "arg_count", "arg_sign", "arg_key_value",
+           "add_vertical_option", "vertical_ratio", "arg_number", "arg_positive",
+           "arg_nonzero", "arg_count", "arg_sign", "arg_key_value",
            "arg_names", "MissingOption", "scene_overrides", "load_scene_from",
            "engine_settings", "backend_overrides", "motion_from",
            "engine_names", "print_json", "output_folder", "write_atomic", "pandas_display"]
@@ -172,6 +173,24 @@ def add_engine_option(p: argparse.ArgumentParser, default: str) -> None:
     p.add_argument("--engine", "--engines", dest="engine", metavar="NAME", action="append",
                    help=f"an engine (rockbench engines); repeat for several, e.g. --engine "
                         f"pymunk --engine mujoco (default: {default})")
+
+
+def add_vertical_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--vertical RATIO`` of a command whose ground motions are generated (``what``: which,
+    e.g. "every pulse and record of the evidence"): a_v = RATIO x the horizontal acceleration,
+    in phase; read back with :func:`vertical_ratio`."""
+    p.add_argument("--vertical", type=arg_number, default=0.0, metavar="RATIO",
+                   help=f"{what} also moves the ground vertically: a_v = RATIO x its "
+                        "horizontal acceleration (same shape and sign, in phase; positive "
+                        "up), 0 to 3 (default 0: horizontal only)")
+
+
+def vertical_ratio(args: argparse.Namespace) -> float:
+    """The ``--vertical`` of a command as r in [0, 3] (ParameterError naming ``--vertical``
+    otherwise)."""
+    from ..studies.map_cells import check_vertical_ratio
+
+    return check_vertical_ratio(getattr(args, "vertical", 0.0), "--vertical")
 
 
 def add_quiet_option(p: argparse.ArgumentParser) -> None:

@@ -54,8 +54,9 @@ from pathlib import Path
 from typing import Any
 
 from .common import (CommandLineError, Parser, absent_engine_lines, add_engine_option,
-                     one_line_warnings, add_motion_options,
-                     add_quiet_option, add_run_options, add_scene_options, arg_count, backend_overrides, engine_names, engine_settings, load_scene_from,
+                     one_line_warnings, add_motion_options, add_quiet_option, add_run_options,
+                     add_vertical_option, vertical_ratio, add_scene_options, arg_count,
+                     backend_overrides, engine_names, engine_settings, load_scene_from,
                      motion_from, output_folder, pandas_display, print_json, write_atomic)
 from ..constants import G
 from ..errors import ParameterError, RockbenchError
@@ -144,6 +145,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "(the paper's: 100x100x4, adaptively; OUT/engine-maps) where it is "
                         "missing or no longer reproduces, the next larger evidence and the full "
                         "stability sweep (reuses the store)")
+    add_vertical_option(p, "every pulse and record of the campaign (the stability sweep "
+                           "stays horizontal)")
     add_quiet_option(p)
     from .choosing import add_choosing_commands
 
@@ -432,9 +435,9 @@ def _print_constants(out: str | Path, scenes=None) -> None:
     if Path(out).exists() and not Path(out).is_dir():
         raise ParameterError("--out", str(out), "a folder (it is a file)")
     if not scenes:
-        from ..campaign.plan import campaign_plan
+        from ..campaign.plan import campaign_plan, every_scene
 
-        scenes = campaign_plan()["scenes"]
+        scenes = every_scene(campaign_plan())          # the paper's frames, every one it runs
 
     keys = ("alpha", "p", "lambda_ccw", "lambda_cw", "eta_ccw", "eta_cw", "phi_cr_ccw",
             "phi_cr_cw", "phi_fall_ccw", "phi_fall_cw", "phi_fracture_ccw", "phi_fracture_cw")
@@ -459,7 +462,8 @@ def cmd_report(args: argparse.Namespace) -> int:
     kwargs: dict[str, Any] = {"full": args.full, "progress": not args.quiet,
                               "engines": engines, "records_dir": args.records,
                               "quick": args.quick, "store": args.store,
-                              "scenes": list(args.scenes) or None}
+                              "scenes": list(args.scenes) or None,
+                              "vertical": vertical_ratio(args) if args.vertical else None}
     if args.plan is not None:
         if args.scenes:
             raise ParameterError("--plan", args.plan, "either --plan FILE or scenes, not both")

@@ -293,7 +293,7 @@ def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tupl
     items = [("engines", ", ".join(names)),
              ("engines that did not run", "; ".join(
                  f"{r['name']} ({r['state']})" for r in engine_states
-                 if r["state"] != "ran") or "none"),
+                 if r["state"] != "ran" and r["name"] not in names) or "none"),
              ("scenes", ", ".join(map(str, plan["scenes"]))),
              ("pulse (A, W) points", ", ".join(f"({a:g}, {w:g})"
                                                for a, w in plan["pulse_points"])),
@@ -301,6 +301,11 @@ def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tupl
              ("pulse run length", describe("pulse", plan["pulse_tail"])),
              ("free rocking", f"phi0 = {plan['free_phi0']:g} alpha, "
                               f"{plan['free_duration']:g} s"),
+             ("vertical ground motion", (
+                 f"a_v = {plan['vertical']:g} x the horizontal acceleration, in phase, in every "
+                 "pulse and record (a record's own vertical channel where it has one); the "
+                 "stability sweep is horizontal" if plan.get("vertical")
+                 else "none (horizontal only)")),
              ("time steps [s]", ", ".join(f"{d:g}" for d in plan["dt_sweep"])),
              ("records folder", str(records_dir) if records_dir else "none"),
              ("quick", str(bool(quick))), ("store", str(store_dir)),

@@ -127,6 +127,7 @@ class Advice:
                 "ranking": [_clean(r) for r in self.ranking(t)]})
         return jsonable({
             "scene": d.scene, "size": d.size, "tolerances": list(self.tolerances),
+            "vertical_ratio": d.vertical,
             "answers": answers, "fates": FATES, "coverage": d.coverage,
             "engines": d.engines, "search_cpu_s": d.cpu_s, "stopped": d.stopped,
             "error_definition": "worst over a part of the evidence of each case's measure: "
@@ -154,7 +155,9 @@ class Advice:
         lines = [f"Scene {d.scene}: {d.size} evidence, chosen on {n_c} cases, confirmed on "
                  f"{len(d.cases) - n_c} held-out cases ({d.coverage['counted']} counted: "
                  f"{d.coverage['overturning']} overturning, {d.coverage['records']} records; "
-                 f"{d.coverage['near_boundary']} near the boundary, not counted)."]
+                 f"{d.coverage['near_boundary']} near the boundary, not counted)"
+                 + (f"; every pulse and record with a vertical part a_v = {d.vertical:g} x "
+                    "the horizontal (in phase)" if d.vertical else "") + "."]
         if d.coverage["thin"]:
             lines.append(f"  Note: {d.coverage['thin']}.")
         for t in self.tolerances:
@@ -193,7 +196,7 @@ class Advice:
 def advise(scene, tolerance: float | Sequence[float] | None = None,
            engines: Sequence[str] | None = None, store=None, *,
            dts: Iterable[float] | None = None, quick: bool = False, full: bool = False,
-           contact: bool | None = None, seed: int | None = None,
+           contact: bool | None = None, seed: int | None = None, vertical: float = 0.0,
            budget_cpu_s: float | None | str = "auto", executor: str = "process",
            workers: int | None = None, progress: bool = False) -> Advice:
     """The cheapest confirmed engine and setting within ``tolerance`` (one, several, or the
@@ -201,7 +204,8 @@ def advise(scene, tolerance: float | Sequence[float] | None = None,
 
     ``quick``: the quick evidence; ``full``: the full evidence and the contact search
     (``contact`` defaults to ``full``); ``store``: a folder, runs reused (resumable);
-    ``budget_cpu_s``: the search's CPU budget ("auto": per evidence size); the rest as
+    ``budget_cpu_s``: the search's CPU budget ("auto": per evidence size); ``vertical``: r,
+    the evidence's vertical motion (a_v = r x horizontal, in phase); the rest as
     :func:`rockbench.studies.search.search`.
     """
     from .search import TOLERANCE_LADDER, search
@@ -213,6 +217,7 @@ def advise(scene, tolerance: float | Sequence[float] | None = None,
             if isinstance(tolerance, (int, float)) else list(tolerance))
     d = search(scene, tols, engines, size=size, store=store, budget_cpu_s=budget_cpu_s,
                dts=dts, contact=full if contact is None else bool(contact), seed=seed,
+               vertical=vertical,
                executor=executor, workers=workers, progress=progress)
     return Advice(d)
 

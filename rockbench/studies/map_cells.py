@@ -49,15 +49,15 @@ def mark_outside(df: pd.DataFrame, scene, vertical: float = 0.0) -> pd.DataFrame
     """``df`` (a map) with the column ``outside`` (:func:`cell_outside`, computed once per
     pulse, sign and A) and ``attrs`` ``vertical_ratio`` and ``outside`` (how many cells)."""
     df = df.copy()
-    known: dict[tuple, bool] = {}
-    flags = []
-    for p, s, a in zip(df["pulse"], df["sign"], df["amplitude"]):
-        key = (str(p), int(s), float(a))
-        if key not in known:
-            known[key] = cell_outside(scene, *key, vertical)
-        flags.append(known[key])
-    df["outside"] = np.array(flags, dtype=bool)
-    df.attrs.update(vertical_ratio=float(vertical), outside=int(np.sum(flags)))
+    keys = pd.DataFrame({"p": df["pulse"].astype(str).to_numpy(dtype=object),
+                         "s": df["sign"].to_numpy().astype(np.int64),
+                         "a": df["amplitude"].to_numpy(dtype=float)})
+    codes, uniq = pd.factorize(pd.MultiIndex.from_frame(keys))
+    known = np.array([cell_outside(scene, str(p), int(s), float(a), vertical)
+                      for p, s, a in uniq], dtype=bool)
+    flags = known[codes] if len(codes) else np.zeros(0, dtype=bool)
+    df["outside"] = flags
+    df.attrs.update(vertical_ratio=float(vertical), outside=int(flags.sum()))
     return df
 
 

@@ -373,7 +373,7 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
     done = simulated_rows(done)
     have = {cell_key(p, s, a, w) for p, s, a, w in zip(done["pulse"], done["sign"],
                                                          done["amplitude"], done["frequency"])}
-    todo = [c for c in cells if cell_key(*c) not in have]
+    todo = [c for c in cells if cell_key(*c) not in have] if have else list(cells)
     reused = len(cells) - len(todo)
     twins: dict[str, tuple] = {}
     if engine == "analytic" and sc.mirror_symmetric and not vertical:
@@ -441,14 +441,29 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
         len(f) for f in frames) else pd.DataFrame(columns=list(MAP_COLUMNS))
     out = tidy_map(out).drop_duplicates(list(MAP_KEY), keep="last")
     out = out[list(MAP_COLUMNS)]
-    keep = {cell_key(*c) for c in cells}
-    mask = [cell_key(p, s, a, w) in keep for p, s, a, w in
-            zip(out["pulse"], out["sign"], out["amplitude"], out["frequency"])]
-    out = out[mask].sort_values(["pulse", "sign", "frequency", "amplitude"],
+    out = out[_rows_of(out, cells)].sort_values(["pulse", "sign", "frequency", "amplitude"],
                                 ascending=[True, False, True, True]).reset_index(drop=True)
     out.attrs.update(scene=sc.name, engine=engine, method=method or "", reused=reused,
                      cells_run=len(todo), vertical_ratio=vertical)
     return out
+
+
+def _rows_of(df: pd.DataFrame, cells: Sequence) -> np.ndarray:
+    """Which rows of the map ``df`` are among ``cells`` (shape, sign, A, W), by the map's key
+    (:func:`rockbench.sweep.map_store.cell_key`: A and W to 9 decimals), in one vectorized
+    membership test."""
+    if not len(df):
+        return np.zeros(0, dtype=bool)
+    c = list(zip(*cells)) if len(cells) else [[], [], [], []]
+    want = pd.MultiIndex.from_arrays([
+        pd.Index(c[0], dtype=object), np.asarray(c[1], dtype=np.int64),
+        np.round(np.asarray(c[2], dtype=float), 9), np.round(np.asarray(c[3], dtype=float), 9)])
+    have = pd.MultiIndex.from_arrays([
+        pd.Index(df["pulse"].astype(str).to_numpy(dtype=object), dtype=object),
+        df["sign"].to_numpy().astype(np.int64),
+        np.round(df["amplitude"].to_numpy(dtype=float), 9),
+        np.round(df["frequency"].to_numpy(dtype=float), 9)])
+    return np.asarray(have.isin(want), dtype=bool)
 
 
 def _engine_rows(scene_ref: Any, overrides: dict | None, engine: str, settings: dict,

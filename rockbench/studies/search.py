@@ -84,7 +84,8 @@ class Decision:
     next_steps : tolerance -> what to run next when nothing meets it (engine, setting,
         ``cpu_s`` estimate, command line), or None;
     engines : every registered engine's state; cpu_s : the CPU the search spent [s];
-    stopped : why the search stopped early ("" when it did not); machine.
+    stopped : why the search stopped early ("" when it did not); machine;
+    vertical : r [-] of the evidence's vertical motion (a_v = r x horizontal; 0: none).
     """
 
     scene: str
@@ -102,6 +103,7 @@ class Decision:
     knobs: dict[str, str] = field(default_factory=dict)
     machine: dict[str, Any] = field(default_factory=dict)
     contact: pd.DataFrame = field(default_factory=pd.DataFrame)
+    vertical: float = 0.0
 
     def at(self, tolerance: float) -> pd.DataFrame:
         """The outcomes at one tolerance, recommended first, then in rank order."""
@@ -185,8 +187,9 @@ def coverage(cases: Sequence[Any]) -> dict[str, Any]:
 def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
            engines: Sequence[str] | None = None, *, size: str = "default", store=None,
            budget_cpu_s: float | None | str = "auto", dts: Iterable[float] | None = None,
-           contact: bool = False, seed: int | None = None, executor: str = "process",
-           workers: int | None = None, progress: bool = False) -> Decision:
+           contact: bool = False, seed: int | None = None, vertical: float = 0.0,
+           executor: str = "process", workers: int | None = None,
+           progress: bool = False) -> Decision:
     """Search the cheapest confirmed engine and setting for each of ``tolerances`` on
     ``scene`` (module docstring).
 
@@ -205,6 +208,9 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
     contact : measure each engine's contact variants (its backend's ``contact_variants``)
         first, and search the helpful ones too (``rockbench advise --full``).
     seed : the evidence's split (default :data:`rockbench.studies.validation.SEED`).
+    vertical : r in [0, 3]: every pulse and record of the evidence also moves the ground
+        vertically, a_v = r times its horizontal acceleration (in phase;
+        :func:`rockbench.studies.validation.validation_set`); 0: horizontal only.
     """
     from ..engines import engine_states, get_backend
     from ..runner import REFERENCE, resolve_engines
@@ -229,7 +235,8 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
         raise ParameterError("engines", engines, "at least one engine besides the analytic model")
     states = [r for r in engine_states(selected) if r["name"] != REFERENCE]
     names = _order([r["name"] for r in states if r["state"] == "ran"])
-    vset = validation_set(scene, size=size, seed=SEED if seed is None else seed)
+    vset = validation_set(scene, size=size, seed=SEED if seed is None else seed,
+                          vertical=vertical)
     choice = [c for c in vset if c.part == "choice"]
     held = [c for c in vset if c.part == "held-out"]
     sim_choice = sum(c.duration for c in choice)
@@ -280,12 +287,14 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
     runs = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     evidence = summarize(runs) if len(runs) else pd.DataFrame()
     rows = _outcome_rows(tols, names, states, outcome)
-    nexts = {t: _next_step(t, rows, outcome, knobs, scene, sim_choice + sim_held, size)
+    nexts = {t: _next_step(t, rows, outcome, knobs, scene, sim_choice + sim_held, size,
+                           float(vertical))
              for t in tols}
     return Decision(scene=scene.name, size=size, tolerances=tols, outcomes=rows,
                     evidence=evidence, runs=runs, cases=vset, coverage=coverage(vset),
                     next_steps=nexts, engines=states, cpu_s=ledger["spent"], stopped=stopped,
-                    knobs=knobs, machine=machine_info(), contact=pd.DataFrame(contact_rows))
+                    knobs=knobs, machine=machine_info(), contact=pd.DataFrame(contact_rows),
+                    vertical=float(vertical))
 
 
 def _label(engine: str, knob: str, value: float, variant: Mapping[str, Any]) -> str:
@@ -551,7 +560,8 @@ def _outcome_rows(tols, names, states, outcome) -> pd.DataFrame:
     return df[cols]
 
 
-def _next_step(t, rows, outcome, knobs, scene, sim_total, size) -> dict[str, Any] | None:
+def _next_step(t, rows, outcome, knobs, scene, sim_total, size,
+               vertical: float = 0.0) -> dict[str, Any] | None:
     """When nothing meets ``t``: the engine that came closest, its next finer setting, and an
     estimate of what running it (choice and held-out) costs [CPU s]."""
     g = rows[np.isclose(rows["tolerance"].astype(float), t)]
@@ -569,7 +579,8 @@ def _next_step(t, rows, outcome, knobs, scene, sim_total, size) -> dict[str, Any
     cost = float(r["cpu_per_sim_s"]) * ((float(r["value"]) / v) if knob == "dt" else 1.0)
     cmd = (f"rockbench advise {scene.name} --tolerance {t:g} --engine {r['engine']} "
            f"--setting {r['engine']}.{knob}={v:g}"
-           + ("" if size == "default" else f" --{size}" if size != "quick" else " --quick"))
+           + ("" if size == "default" else f" --{size}" if size != "quick" else " --quick")
+           + (f" --vertical {vertical:g}" if vertical else ""))
     return {"engine": r["engine"], "setting": f"{knob}={v:g}", "knob": knob, "value": v,
             "cpu_s": cost * sim_total if math.isfinite(cost) else math.nan, "command": cmd}
 

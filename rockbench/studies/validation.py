@@ -41,6 +41,12 @@ Every case is labelled by its own conditioning, whatever its kind:
 On a mirror-symmetric structure (equal thresholds, restitution and fall angles both ways) a
 case and its sign-flipped twin are the same physics: only the positive sign is kept.
 
+With a vertical ratio r (``validation_set(vertical=r)``, ``advise --vertical``) every pulse
+and record of the evidence also moves the ground vertically, a_v = r times its horizontal
+acceleration, in phase: the thresholds, the labels and the analytic reference are computed
+with it, and both signs are kept (a vertical part turns with the pulse's sign: the reversed
+pulse is no mirror image).
+
 Every case has a *group* (free | away:<shape><sign> | near | overturn | record). Within a group
 (the away cells of the four pulses together) the cases are put in a seeded, deterministic order
 (sha256 of the seed and the case name); a set of size ``quick`` / ``default`` / ``full`` takes,
@@ -191,10 +197,11 @@ def _scene_from_key(text: str):
     return Scene.from_dict(json.loads(text))
 
 
-def _pulse(scene, A: float, W: float, shape: str, sign: int):
+def _pulse(scene, A: float, W: float, shape: str, sign: int, vertical: float = 0.0):
     from ..scene.motion import RickerPulse
 
-    return RickerPulse.dimensionless(A, W, scene.structure, shape, sign)
+    return RickerPulse.dimensionless(A, W, scene.structure, shape, sign,
+                                     vertical_ratio=vertical)
 
 
 def _analytic(scene, motion, duration: float, phi0: float = 0.0, *, compiled: bool = False):
@@ -213,12 +220,13 @@ def _fall(scene) -> float:
 
 
 @functools.lru_cache(maxsize=512)
-def _threshold(key: str, W: float, shape: str, sign: int, rtol: float) -> float:
+def _threshold(key: str, W: float, shape: str, sign: int, rtol: float,
+               vertical: float = 0.0) -> float:
     scene = _scene_from_key(key)
     sc = scene.replace(fall_angle=_fall(scene))
 
     def overturns(A: float) -> bool:
-        p = _pulse(sc, A, W, shape, sign)
+        p = _pulse(sc, A, W, shape, sign, vertical)
         return bool(_analytic(sc, p, run_length(p, _OVER_TAIL, window="strong"),
                               compiled=True).summary.overturned)
 
@@ -237,13 +245,15 @@ def _threshold(key: str, W: float, shape: str, sign: int, rtol: float) -> float:
 
 
 def overturn_threshold(scene, W: float, shape: str = "symmetric", sign: int = 1, *,
-                       rtol: float = 1e-3) -> float:
+                       rtol: float = 1e-3, vertical: float = 0.0) -> float:
     """The smallest A = a_g / (g tan alpha) [-] of a Ricker pulse (``W`` = omega_g / p,
     ``shape``, ``sign``) that overturns ``scene`` in the analytic model (fall angle
     min(4 alpha, the scene's), run to 8 s after the pulse's strong part), found by scanning A up
     from 1 by factors of 1.5 and bisecting the first bracket to a relative width ``rtol`` (inf
-    when nothing up to A = 30 overturns it). Cached in memory per scene data."""
-    return _threshold(_scene_key(scene), float(W), str(shape), int(sign), float(rtol))
+    when nothing up to A = 30 overturns it). ``vertical``: r, the pulse's vertical part
+    a_v = r u_g'' (in phase). Cached in memory per scene data."""
+    return _threshold(_scene_key(scene), float(W), str(shape), int(sign), float(rtol),
+                      float(vertical))
 
 
 def uplift_threshold(scene) -> float:
@@ -293,11 +303,12 @@ def mirror_symmetric(scene) -> bool:
 
 
 @functools.lru_cache(maxsize=16)
-def _candidates(key: str) -> tuple[tuple[str, dict[str, Any]], ...]:
+def _candidates(key: str, vertical: float = 0.0) -> tuple[tuple[str, dict[str, Any]], ...]:
     """(group, description) of every candidate case of the scene, in a fixed order (one sign
-    only for a mirror-symmetric structure)."""
+    only for a mirror-symmetric structure without vertical motion: a pulse's vertical part
+    turns with its sign, so the reversed pulse is no mirror image)."""
     scene = _scene_from_key(key)
-    signs = (1,) if mirror_symmetric(scene) else (1, -1)
+    signs = (1,) if mirror_symmetric(scene) and not vertical else (1, -1)
     out: list[tuple[str, dict[str, Any]]] = []
     for f in _FREE_PHI0:
         for s in signs:
@@ -307,11 +318,11 @@ def _candidates(key: str) -> tuple[tuple[str, dict[str, Any]], ...]:
         for shape, sign in _PULSES:
             if sign not in signs:
                 continue
-            A_ov = overturn_threshold(scene, W, shape, sign)
+            A_ov = overturn_threshold(scene, W, shape, sign, vertical=vertical)
             if not math.isfinite(A_ov):
                 continue
             tag = _short(shape, sign)
-            base = {"W": W, "shape": shape, "sign": sign, "A_ov": A_ov}
+            base = {"W": W, "shape": shape, "sign": sign, "A_ov": A_ov, "v": vertical}
             if A_ov > A_up:
                 for f in AWAY_LEVELS:
                     A = round(A_up + f * (A_ov - A_up), 4)
@@ -328,7 +339,7 @@ def _candidates(key: str) -> tuple[tuple[str, dict[str, Any]], ...]:
             for s in signs:
                 out.append(("record", {"kind": "record", "path": str(rec["path"]),
                                        "name": rec["name"], "f": f, "s": s,
-                                       "pga_target": f * pga_up}))
+                                       "pga_target": f * pga_up, "v": vertical}))
     return tuple(out)
 
 
@@ -357,7 +368,8 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
         A, W, shape, sign = desc["A"], desc["W"], desc["shape"], desc["sign"]
         ratio = A / desc["A_ov"]
         near = abs(ratio - 1.0) <= NEAR_MARGIN
-        p = _pulse(sc, A, W, shape, sign)
+        vr = float(desc.get("v", 0.0))
+        p = _pulse(sc, A, W, shape, sign, vr)
         if not motion_validity(sc, p):           # outside the model: its base would slide
             return None
         dur = run_length(p, _OVER_TAIL if (near or ratio > 1) else _AWAY_TAIL,
@@ -367,7 +379,8 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
             return None
         kind = "overturn" if r.summary.overturned else "survive"
         agree = _verdict_agreement(sc, p, dur)
-        spec = (("A", A), ("W", W), ("kind", "ricker"), ("shape", shape), ("sign", sign))
+        spec = (("A", A), ("W", W), ("kind", "ricker"), ("shape", shape), ("sign", sign)) + (
+            (("vertical_ratio", vr),) if vr else ())
         return ValidationCase(kind, name, spec, 0.0, dur, fall,
                               float(r.summary.max_abs_phi_over_alpha),
                               near_boundary=near or agree < 1.0, a_ratio=round(ratio, 4),
@@ -380,6 +393,9 @@ def _make_case(key: str, desc_json: str) -> ValidationCase | None:
     scale = round(desc["s"] * desc["pga_target"] / rec.peak, 4)
     spec["scale"] = scale
     rec = rec.scaled(scale)
+    if desc.get("v"):                  # the vertical channel: r times the scaled horizontal
+        spec["vertical_ratio"] = float(desc["v"])
+        rec = rec.with_vertical_ratio(spec["vertical_ratio"])
     if not motion_validity(scene, rec):          # outside the model: its base would slide
         return None
     dur = round(min(_RECORD_DURATION, rec.t_end - rec.t_start), 3)
@@ -410,9 +426,10 @@ def candidate_cases(scene) -> list[tuple[str, str]]:
 
 
 @functools.lru_cache(maxsize=16)
-def _validation_set(key: str, size: str, seed: int) -> tuple[ValidationCase, ...]:
+def _validation_set(key: str, size: str, seed: int,
+                    vertical: float = 0.0) -> tuple[ValidationCase, ...]:
     groups: dict[str, list[tuple[str, dict[str, Any]]]] = {}
-    for g, d in _candidates(key):          # the away cells of the four pulses: one group
+    for g, d in _candidates(key, vertical):    # the away cells of the four pulses: one group
         groups.setdefault(g.split(":")[0], []).append((g, d))
     sizes = GROUP_SIZES[size]
     out: list[ValidationCase] = []
@@ -435,15 +452,21 @@ def _validation_set(key: str, size: str, seed: int) -> tuple[ValidationCase, ...
 
 
 def validation_set(scene, *, quick: bool = False, size: str | None = None,
-                   seed: int = SEED) -> list[ValidationCase]:
+                   seed: int = SEED, vertical: float = 0.0) -> list[ValidationCase]:
     """The evidence of ``scene`` (module docstring) of size ``size`` ("quick", "default" or
     "full"; ``quick=True`` is ``size="quick"``), split into choice and held-out parts
     (``case.part``) with ``seed``. quick is a subset of default, default of full: the same
-    cases. Cached in memory per scene data."""
+    cases. ``vertical``: r in [0, 3] (limit ``vertical_ratio``): every pulse and record of
+    the evidence also moves the ground vertically, a_v = r times its horizontal acceleration
+    (in phase; thresholds and labels computed with it); 0: horizontal only. Cached in memory
+    per scene data."""
+    from .map_cells import check_vertical_ratio
+
+    vertical = check_vertical_ratio(vertical, "vertical")
     if size is None:
         size = "quick" if quick else "default"
     if size not in GROUP_SIZES:
         raise ParameterError("size", size, f"one of {', '.join(GROUP_SIZES)}")
     if isinstance(seed, bool) or not isinstance(seed, int):
         raise ParameterError("seed", seed, "an integer")
-    return list(_validation_set(_scene_key(scene), size, int(seed)))
+    return list(_validation_set(_scene_key(scene), size, int(seed), vertical))

@@ -22,8 +22,8 @@ Columns of the frame (:data:`VALIDITY_COLUMNS`; ``docs/maps.md``):
   ``"diverged"`` outside, and at least one engine's run diverged, was invalid or failed (or
   no engine could run);
 * ``reason``: the analytic run's validity sentence (``inside``, or "outside the model from
-  t = ... s: why"; a run that does not assess it, e.g. a hybrid frame rocking with its devices
-  intact: the a-priori test from the motion, :func:`rockbench.validity.motion_validity`);
+  t = ... s: why"; a run that does not assess it: the a-priori test from the motion,
+  :func:`rockbench.validity.motion_validity`);
 * ``sliding_onset_s`` [s]: first time a contact of the analytic model needs more friction
   than it has (NaN: never); ``lift_off_s`` [s]: first time g + a_v <= 0 (NaN: never);
 * ``spread_phi`` [-]: (max - min) / max(median, :data:`PHI_FLOOR`) of the engines' peak

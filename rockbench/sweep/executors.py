@@ -155,7 +155,9 @@ Part = tuple[Callable[..., Any], tuple]
 def _run_lane(parts: dict[str, Part], quiet: bool = False
               ) -> tuple[dict[str, Any], dict[str, tuple[float, float]]]:
     """Run ``parts`` (name -> (function, args)) one after the other; return their results and
-    (wall [s], CPU [s]) each: CPU of this thread plus that of its local pools' workers."""
+    (wall [s], CPU [s]) each: CPU of this thread plus that of its local pools' workers. Each
+    part keeps its local pools (:func:`kept_pools`): its sweeps, maps and fits share workers
+    whose imports and compiled kernels are paid once."""
     if quiet:
         from ..progress import configure
         configure(quiet=True)
@@ -166,7 +168,8 @@ def _run_lane(parts: dict[str, Part], quiet: bool = False
         token = _CPU_SINK.set(sink)
         w0, c0 = time.perf_counter(), time.thread_time()
         try:
-            results[name] = fn(*args)
+            with kept_pools():
+                results[name] = fn(*args)
         finally:
             timings[name] = (time.perf_counter() - w0, time.thread_time() - c0 + sink[0])
             _CPU_SINK.reset(token)

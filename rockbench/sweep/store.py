@@ -197,7 +197,17 @@ class writer_lock:
                 os.ftruncate(self._fd, 0)
             except OSError:
                 pass
-            os.close(self._fd)  # releases the flock
+            # unlock explicitly before closing: a pool worker forked while the lock was held
+            # shares its open file description, and closing this copy alone would leave the
+            # store locked as long as that worker lives (a kept pool's workers outlive the
+            # write)
+            import fcntl
+
+            try:
+                fcntl.flock(self._fd, fcntl.LOCK_UN)
+            except OSError:
+                pass
+            os.close(self._fd)
             self._fd = None
 
 

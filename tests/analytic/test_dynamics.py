@@ -14,6 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import rockbench as rb
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -332,3 +333,58 @@ def test_asymmetric_lambdas_differ_and_bracket_tan_alpha():
     for s in (1, -1):
         assert ta < abs(ref.lam[s]) < ta1
     assert abs(ref.lam[1]) != pytest.approx(abs(ref.lam[-1]), rel=1e-3)
+
+
+# --- the critical angle in closed form where dV/dphi is one sinusoid ---------------------------
+def _critical_cases():
+    out = [(name, None) for name in rb.builtin_scenes()]
+    # user structures the package never names: a squat and a slender block, an equal-column
+    # frame with a heavy deck, an unequal one (the closed form must refuse it)
+    out += [("housner-block", {"structure.width": 0.9, "structure.height": 1.1}),
+            ("housner-block", {"structure.width": 0.2, "structure.height": 3.0}),
+            ("paper-symmetric", {"structure.beam_mass": 4.0e6}),
+            ("paper-asymmetric", {"structure.column_height_right": 4.0})]
+    return out
+
+
+@pytest.mark.parametrize("name,overrides", _critical_cases())
+def test_the_closed_form_critical_angle_is_the_searched_one(name, overrides):
+    """Where the gravity term (plus a symmetric frame's tendons) is one sinusoid in phi - a
+    block, a frame whose columns stay parallel - the critical angle is atan2(b, a) + pi/2;
+    elsewhere the form is refused and the scan with Brent's method decides. Both agree to
+    round-off on every built-in scene and on structures written here."""
+    import math
+
+    from rockbench.analytic.reference import Reference, _sinusoid_root
+
+    R = Reference(rb.load_scene(name, overrides))
+    for s in (1, -1):
+        for intact in (True, False):
+            closed, searched = R.critical[(s, intact)], R._searched_critical_angle(s, intact)
+            assert closed == searched or abs(closed - searched) <= 1e-12 * abs(searched)
+    dyn, lim = R.dyn[1], R.fall[1]
+    root = _sinusoid_root(lambda x: dyn.potential_gradient(x, False), lim)
+    parallel = not name.startswith("paper-asymmetric")
+    assert (root is not None) == parallel
+
+
+def test_a_scene_s_reference_is_computed_once():
+    """Every run, measurement and comparison of a scene shares one Reference (its critical and
+    fracture angles are searched once per scene parameters, not once per run)."""
+    from rockbench.analytic.reference import reference_of
+
+    a = rb.load_scene("paper-asymmetric-hybrid")
+    assert reference_of(a) is reference_of(rb.load_scene("paper-asymmetric-hybrid"))
+
+
+def test_the_compiled_tableau_is_scipys_dop853():
+    """The compiled path's tableau, read from scipy's file without importing scipy.integrate,
+    is scipy's own table, entry for entry."""
+    from scipy.integrate._ivp import dop853_coefficients as c
+
+    from rockbench.analytic.tableau import dop853_tableau
+
+    A, B, C, E3, E5, D, n = dop853_tableau()
+    assert n == c.N_STAGES
+    for mine, theirs in ((A, c.A), (B, c.B), (C, c.C), (E3, c.E3), (E5, c.E5), (D, c.D)):
+        assert np.array_equal(mine, np.asarray(theirs, dtype=float))
