@@ -55,10 +55,15 @@ def _part_comparisons(c: dict[str, Any]) -> list[dict[str, Any]]:
     return _comparisons(jobs, cache=c["cache"], desc="comparisons", **c["run"])
 
 
+def _ratio(plan: Any) -> float:
+    """The plan's vertical ratio r [-] (``vertical``: a_v = r x the horizontal acceleration,
+    in phase; 0 without one)."""
+    return float(plan.get("vertical", 0.0) or 0.0)
+
+
 def _vertical(plan: Any) -> dict[str, float]:
-    """The motion-spec entry of the plan's vertical ratio (``vertical``: a_v = r x the
-    horizontal acceleration, in phase), empty without one."""
-    r = float(plan.get("vertical", 0.0) or 0.0)
+    """The motion-spec entry of the plan's vertical ratio, empty without one."""
+    r = _ratio(plan)
     return {"vertical_ratio": r} if r else {}
 
 
@@ -99,7 +104,7 @@ def _part_maps(c: dict[str, Any]) -> dict[str, Any]:
                     progress=run["progress"], workers=run["workers"],
                     scheduler=run["dask_address"] if run["executor"] == "dask" else None,
                     maps=c["plan"]["maps"],
-                    vertical=_vertical(c["plan"]).get("vertical_ratio", 0.0))
+                    vertical=_ratio(c["plan"]))
 
 
 def _part_choice(c: dict[str, Any]) -> dict[str, Any]:
@@ -112,7 +117,7 @@ def _part_choice(c: dict[str, Any]) -> dict[str, Any]:
                       scene=plan["choice_scene"], stress_scene=plan.get("stress_scene"),
                       stress_hybrid=plan.get("stress_hybrid_scene"),
                       evidence=plan.get("choice_evidence", "quick"),
-                      vertical=_vertical(plan).get("vertical_ratio", 0.0))
+                      vertical=_ratio(plan))
 
 
 def _part_records(c: dict[str, Any]) -> tuple[pd.DataFrame, list[str]]:
@@ -138,14 +143,14 @@ def _part_fragility(c: dict[str, Any]) -> dict[str, Any]:
                              export_dir=c["out"] / "fragility-export",
                              executor=run["executor"], workers=run["workers"],
                              scheduler=run["dask_address"], progress=run["progress"],
-                             vertical=_vertical(c["plan"]).get("vertical_ratio"))
+                             vertical=_ratio(c["plan"]) or None)
 
 
 def _part_validity(c: dict[str, Any]) -> dict[str, Any]:
     """8: where the analytic model holds (a user's scene with its own friction)."""
     return _validity_section(c["plan"].get("validity_map"), c["names"], c["store_dir"],
                              c["run"]["workers"], c["run"]["progress"],
-                             _vertical(c["plan"]).get("vertical_ratio", 0.0))
+                             _ratio(c["plan"]))
 
 
 #: The parts of a campaign, in the order of the page's run-time table.
@@ -193,13 +198,10 @@ def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], stor
 def _record_vertical(rec: Mapping[str, Any], plan: Mapping[str, Any]) -> dict[str, Any]:
     """The motion-spec entries of a record's vertical motion: its own vertical channel (a
     records.csv column ``vertical``), else the plan's ratio (a_v = r x the horizontal), else
-    none."""
-    if rec.get("vertical") is not None:
-        return {k: v for k, v in (("vertical_path", str(rec["vertical"])),
-                                  ("vertical_dt", rec.get("vertical_dt")),
-                                  ("vertical_units", rec.get("vertical_units")))
-                if v is not None}
-    return _vertical(plan)
+    none (:func:`rockbench.studies.fragility.vertical_spec`, the one rule)."""
+    from ..studies.fragility import vertical_spec
+
+    return vertical_spec(rec, _ratio(plan))
 
 
 def _record_bands(rows: pd.DataFrame, durations: Mapping[str, float | None],
