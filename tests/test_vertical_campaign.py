@@ -63,11 +63,10 @@ def test_the_campaign_parts_build_every_motion_with_the_plans_vertical(monkeypat
     seen = []
     monkeypatch.setattr(P, "_comparisons", lambda jobs, **kw: seen.extend(jobs) or [])
     plan = dict(campaign_plan(), vertical=0.3)
-    ctx = {"plan": plan, "names": ["analytic"], "cache": None,
+    ctx = {"plan": plan, "names": ["analytic"], "cache": None, "quick": False,
            "run": {"executor": "serial", "workers": 1, "progress": False,
                    "dask_address": None}}
     P._part_comparisons(ctx)
-    P._part_speed(dict(ctx, names=["analytic", "pymunk"]))
     moving = [j for j in seen if j["motion"] is not None]
     assert moving and all(j["motion"]["vertical_ratio"] == 0.3 for j in moving)
     # the symmetric frame's reversed pulses run: with a vertical part they are no mirror

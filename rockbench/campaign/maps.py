@@ -96,12 +96,8 @@ def _engine_map(sc: Any, eng: str, store: Path, measured: Path | None, *, full: 
     engines' maps are computed now."""
     axes = dict(_axes(maps)[1], vertical=vertical)
     lab = scene_label(sc)
-    if quick:           # a first look: the fast engines' maps only, on 4 x 4 x 4 cells
-        if not is_fast(eng):
-            return None, (0, 0), "--quick maps the fast engines only"
-        g = (4, 4)
-        return (run_map(sc, eng, store=map_store_path(store, lab, eng, "4x4"),
-                        **dict(axes, grid=g), **run), g, "computed now")
+    if quick:           # a first look decides on its evidence; maps are for the full report
+        return None, (0, 0), "--quick draws the analytic map only"
     why = "no measured map"
     if vertical:
         why = "the measured maps are of horizontal pulses"
@@ -169,7 +165,8 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
                                         run=run, maps=maps, vertical=vertical)
             out["provenance"].append(f"{eng} on {lab}: " + (
                 f"{g[0]}x{g[1]}x4 cells, {source}" if df is not None else
-                f"no map ({source}; `rockbench report --full` measures it)"))
+                f"no map ({source}; `rockbench report"
+                + ("` maps the fast engines" if quick else " --full` measures it") + ")"))
             if df is None:
                 continue
             cells = dict(axes, grid=g)
@@ -198,5 +195,7 @@ def run_maps(engines: Sequence[str], store: Path, *, full: bool = False, quick: 
                          "disagree_away": ag["disagree_away"], "in_words": words})
             out["words"].append(agreement_words(rows[-1], engine=eng, scene=lab)
                                 + f"; {words}.")
-    out["agreement"] = pd.DataFrame(rows)
+    from ..report.tables import CAMPAIGN_COLUMNS
+
+    out["agreement"] = pd.DataFrame(rows, columns=list(CAMPAIGN_COLUMNS["map_agreement.csv"]))
     return out

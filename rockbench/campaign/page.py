@@ -47,23 +47,31 @@ def _hybrid(scenes, labels: dict[str, str]) -> dict[str, bool]:
     return out
 
 
-def model_row(t: Any, scene_word: str) -> dict[str, Any] | None:
-    """The analytic model's row of the decision for the decision's scene (``scene_word``, a
-    label of ``t.labels`` or a scene of the plan): its cost (the median of the speed table's
-    ``ref_cpu_per_sim_s`` [CPU s per simulated s], measured beside the engines) and where it
-    holds and ends by the one validity rule (:mod:`rockbench.validity`); None without a
-    measured cost."""
+def _model_cost(t: Any) -> float | None:
+    """The analytic model's cost [CPU s per simulated s]: the median ``cpu_per_sim_s`` of its
+    own rows of the comparisons (its pulse and free-rocking runs, measured beside the
+    engines'); None when none was measured."""
     import pandas as pd
 
+    m = t.metrics
+    if m is None or not len(m) or "cpu_per_sim_s" not in m:
+        return None
+    cost = pd.to_numeric(m.loc[m["backend"] == "analytic", "cpu_per_sim_s"],
+                         errors="coerce").dropna()
+    return float(cost.median()) if len(cost) else None
+
+
+def model_row(t: Any, scene_word: str) -> dict[str, Any] | None:
+    """The analytic model's row of the decision for the decision's scene (``scene_word``, a
+    label of ``t.labels`` or a scene of the plan): its cost (:func:`_model_cost`) and where it
+    holds and ends by the one validity rule (:mod:`rockbench.validity`); None without a
+    measured cost."""
     from ..constants import G
     from ..scene import load_scene
     from ..validity import friction_of, pga_limit
 
-    speed = t.speed
-    if speed is None or not len(speed) or "ref_cpu_per_sim_s" not in speed:
-        return None
-    cost = pd.to_numeric(speed["ref_cpu_per_sim_s"], errors="coerce").dropna()
-    if not len(cost):
+    cost = _model_cost(t)
+    if cost is None:
         return None
     scenes = list(t.plan["scenes"])
     pick = next((s for s in scenes if t.labels.get(s, s) == scene_word or s == scene_word),
@@ -74,7 +82,7 @@ def model_row(t: Any, scene_word: str) -> dict[str, Any] | None:
     mu, lim = friction_of(scene), pga_limit(scene) / G
     given = ("the scene's friction" if scene.friction is not None
              else "the engines' common default: the scene gives none")
-    return {"cpu_per_sim_s": float(cost.median()),
+    return {"cpu_per_sim_s": cost,
             "holds": f"PGA <= mu g = {lim:.3g} g with mu = {mu:g} ({given}), no sliding "
                      "onset along the run, contact kept",
             "breaks": f"PGA > {lim:.3g} g: the base slides (outside the model)"}
@@ -144,7 +152,7 @@ def write_page(t: Any, out: Path) -> Path:
                                                                   if t.paper else ""),
                                       fragility_html, (t.fragility, out / "figures"), {})
     pending = _render_apart({k: v[1:] for k, v in apart.items()})
-    lines = campaign_conclusion(t.engines, t.metrics, t.eta_summary, t.speed, t.records,
+    lines = campaign_conclusion(t.engines, t.metrics, t.eta_summary, t.records,
                                 hybrid=_hybrid(plan["scenes"], t.labels),
                                 noun="frames" if _all_frames(plan["scenes"]) else "structures")
     # the decision first (measured, CPU time), then the maps' agreement, then the evidence

@@ -1,5 +1,4 @@
-"""The parts of a campaign (``rockbench report``): the case-by-case comparisons, the speed
-sweep, the maps, the decision, the records, fragility and the validity map. Each part is a
+"""The parts of a campaign (``rockbench report``): the case-by-case comparisons, the maps, the decision, the records, fragility and the validity map. Each part is a
 function of the campaign's context (a picklable dict made by
 :func:`rockbench.campaign.run.measure_campaign`), so that a lane of them can run in a process
 of its own (:func:`rockbench.sweep.executors.run_parts`)."""
@@ -81,19 +80,6 @@ def _mirror_symmetric(scene: Any) -> bool:
     return (scene if isinstance(scene, Scene) else load_scene(scene)).mirror_symmetric
 
 
-def _part_speed(c: dict[str, Any]) -> list[dict[str, Any]]:
-    """3: speed against accuracy (every engine through the plan's time steps)."""
-    plan = c["plan"]
-    dc = plan["dt_case"]
-    dur = pulse_run_length(dc["W"], _p(dc["scene"]), plan["dt_tail"])
-    jobs = [{"kind": "dt", "scene": dc["scene"], "engine": e, "dt": float(dt),
-             "motion": {"kind": "ricker", **{k: dc[k] for k in ("shape", "sign", "A", "W")},
-                        **_vertical(plan)},
-             "duration": dur}
-            for e in c["names"] if e != REFERENCE for dt in plan["dt_sweep"]]
-    return _comparisons(jobs, cache=c["cache"], desc="time steps", **c["run"])
-
-
 def _part_maps(c: dict[str, Any]) -> dict[str, Any]:
     """4: overturning maps at the paper's resolution (paper Figs. 4-7)."""
     from .maps import run_maps
@@ -154,13 +140,12 @@ def _part_validity(c: dict[str, Any]) -> dict[str, Any]:
 
 
 #: The parts of a campaign, in the order of the page's run-time table.
-PARTS = {"comparisons": _part_comparisons, "speed": _part_speed, "maps": _part_maps,
-          "choice": _part_choice, "records": _part_records, "fragility": _part_fragility,
-          "validity map": _part_validity}
+PARTS = {"comparisons": _part_comparisons, "maps": _part_maps, "choice": _part_choice,
+         "records": _part_records, "fragility": _part_fragility, "validity map": _part_validity}
 #: The two lanes of the local executor (the first in this process), each part's CPU measured
 #: on the paper's plan (runtime.csv) so that both lanes end near together.
-LANES = [["comparisons", "records", "fragility", "validity map"],
-          ["maps", "choice", "speed"]]
+LANES = [["comparisons", "fragility", "validity map"],
+          ["maps", "choice", "records"]]
 
 
 def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], store_dir: Path,

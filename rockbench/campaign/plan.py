@@ -13,7 +13,6 @@
   - pulse cases at W = 3 and 4 with A the geometric mean of the largest uplift threshold
     (A_up = min|lambda| / tan alpha) and the smallest analytic overturning threshold of the four
     Ricker pulses at that W (over every scene): each scene rocks and survives;
-  - the speed sweep's case on the first scene at A = 0.7 x that threshold, W = 4;
   - fracture cases: per scene with fracturing devices, the smallest A (A = 1 .. 60 by factors
     of 1.25, antisymmetric + pulse, W = 3) at which the analytic model fractures them;
   - analytic maps of every scene at the paper's resolution, engine maps of the first scene (the
@@ -107,7 +106,7 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
                     folder: str | os.PathLike = ".") -> dict[str, Any]:
     """The campaign plan for ``scenes`` (names, TOML paths or Scenes; the first one is the
     structure the decision is about), derived as the module docstring says. ``quick``: the
-    quick form (one pulse, two time steps, one record, no fracture cases).
+    quick form (one pulse, one record, no fracture cases).
     ``folder``: where Scene objects are saved for the worker processes."""
     from ..scene.scene import load_scene
     from ..studies.validation import uplift_threshold
@@ -117,10 +116,9 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
     refs = scene_refs(scenes, folder)
     loaded = [load_scene(r) for r in refs]
     first, sc0 = refs[0], loaded[0]
-    a3 = min(_thresholds(s, 3.0) for s in loaded)
-    a4 = min(_thresholds(s, 4.0) for s in loaded)
+    t3, t4 = ([_thresholds(s, w) for s in loaded] for w in (3.0, 4.0))
+    a3, a4, a3_0, a4_0 = min(t3), min(t4), t3[0], t4[0]
     a_up = max(uplift_threshold(s) for s in loaded)
-    a3_0, a4_0 = _thresholds(sc0, 3.0), _thresholds(sc0, 4.0)
     a10 = _thresholds(sc0, 10.0)
     finite = [x for x in (a3, a4, a3_0, a4_0) if math.isfinite(x)]
     if not finite:
@@ -143,8 +141,6 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
         "pulse_points": ((r2(rock(a3)), 3.0),) if quick else
         ((r2(rock(a3)), 3.0), (r2(rock(a4)), 4.0)),
         "pulse_shapes": paper["pulse_shapes"] if quick else _SHAPES,
-        "dt_case": {"scene": first, "shape": "symmetric", "sign": 1,
-                    "A": r2(0.7 * fin(a4_0)), "W": 4.0},
         "fracture_cases": tuple(frac),
         "record_frames": {n: r for n, r in zip(names[:3], refs[:3])},
         "choice_scene": first,
@@ -222,7 +218,6 @@ def load_plan(path: str | os.PathLike, *, quick: bool = False,
     merged["scenes"] = list(base["scenes"])
     merged.setdefault("maps", {})
     merged["maps"] = {**base["maps"], **dict(merged["maps"])}
-    merged["dt_case"] = dict(merged["dt_case"])
     merged["quick"] = c.get("quick", {})
     full, q = read_plan({"campaign": _plain(merged)}, str(path))
     return q if quick else full
@@ -279,8 +274,6 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     full = {"scenes": tuple(c["scenes"]), "pulse_points": _pairs(c["pulse_points"]),
             "pulse_shapes": _pairs(c["pulse_shapes"], (str, int)),
             "pulse_tail": float(c["pulse_tail"]),
-            "dt_sweep": tuple(map(float, c["dt_sweep"])),
-            "dt_case": dict(c["dt_case"]), "dt_tail": float(c["pulse_tail"]),
             "free_phi0": float(c["free_phi0"]), "free_duration": float(c["free_duration"]),
             "max_records": None, "record_tail": None,
             "record_duration": (float(c["record_duration"]) if "record_duration" in c
@@ -300,9 +293,6 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
                  pulse_shapes=_pairs(q.get("pulse_shapes", full["pulse_shapes"][:1]),
                                      (str, int)),
                  pulse_tail=float(q.get("pulse_tail", 2.0)),
-                 dt_sweep=tuple(map(float, q.get("dt_sweep", full["dt_sweep"][1:3]))),
-                 dt_case=dict(c["dt_case"]),
-                 dt_tail=float(q.get("dt_tail", 2.0)),
                  free_duration=float(q.get("free_duration", 3.0)),
                  max_records=int(q.get("max_records", 1)),
                  record_tail=float(q.get("record_tail", 2.0)),
@@ -354,13 +344,13 @@ def _paper_plans() -> tuple[dict[str, Any], dict[str, Any]]:
 def campaign_plan(quick: bool = False) -> dict[str, Any]:
     """The paper's plan (a fresh copy; ``scenarios/paper-plan.toml``, read and checked on first
     use): ``scenes``, ``pulse_points`` ((A, W) pairs), ``pulse_shapes`` ((shape, sign) pairs),
-    ``pulse_tail`` [s], ``dt_sweep`` [s], ``dt_case`` (scene, shape, sign, A, W), ``dt_tail`` [s],
+    ``pulse_tail`` [s],
     ``free_phi0`` [alpha], ``free_duration`` [s], ``max_records`` (None: all), ``record_tail``
     [s] (None: record + 10 s), ``record_duration`` [s] (cap on a record run's length from its
     start, None: no cap), ``record_frames`` (label -> scene), ``fracture_cases`` ((scene,
     shape, sign, A, W)), the choice and stress scenes and ``maps`` (``docs/plans.md``).
 
-    ``quick``: a few cases (two scenes, one pulse, two time steps, shorter runs) for tests and a first look.
+    ``quick``: a few cases (two scenes, one pulse, shorter runs) for tests and a first look.
     """
     p = _paper_plans()[1 if quick else 0]
     return {k: dict(v) if isinstance(v, dict) else v for k, v in p.items()}

@@ -120,28 +120,6 @@ def pulse_shapes(v: Any) -> None:
         _shape_sign(*r)
 
 
-def time_steps(v: Any) -> None:
-    vals = [_number(x, _DT[0], _DT[1], lo_open=False, what="a time step [s]")
-            for x in _list(v, "time steps [s]")]
-    if len(set(vals)) != len(vals):
-        raise _Bad("distinct time steps (a step given twice would run its cases twice)")
-
-
-def dt_case(v: Any) -> None:
-    if not isinstance(v, Mapping):
-        raise _Bad("a table {scene, shape, sign, A, W}")
-    need = {"scene", "shape", "sign", "A", "W"}
-    if set(v) != need:
-        extra, missing = sorted(set(v) - need), sorted(need - set(v))
-        raise _Bad("a table with exactly scene, shape, sign, A, W"
-                   + (f" (unknown: {', '.join(extra)})" if extra else "")
-                   + (f" (missing: {', '.join(missing)})" if missing else ""))
-    scene_ref(v["scene"])
-    _shape_sign(v["shape"], v["sign"])
-    _limit("A", v["A"], "A")
-    _limit("W", v["W"], "W")
-
-
 def phi0(v: Any) -> None:
     _number(v, 0.0, 10.0, what="an initial rotation phi0 / alpha [-]")
 
@@ -262,11 +240,6 @@ KEYS: tuple[PlanKey, ...] = (
             pulse_shapes),
     PlanKey("campaign", "pulse_tail", "s", f"(0, {_SECONDS:g}]", "6",
             "free rocking after each pulse window (6 T_g)", seconds),
-    PlanKey("campaign", "dt_sweep", "s", f"distinct time steps in [{_DT[0]:g}, {_DT[1]:g}]",
-            "2e-3, 1e-3, 5e-4, 2e-4", "the engines' time steps of the speed-against-accuracy "
-            "sweep", time_steps),
-    PlanKey("campaign", "dt_case", "", "a table {scene, shape, sign, A, W}", _DERIVED,
-            "the pulse case of that sweep", dt_case),
     PlanKey("campaign", "free_phi0", "-", "(0, 10]", "0.3",
             "initial rotation phi0 / alpha of the free-rocking cases", phi0),
     PlanKey("campaign", "free_duration", "s", f"(0, {_SECONDS:g}]", "8",
@@ -283,7 +256,7 @@ KEYS: tuple[PlanKey, ...] = (
             '"default" ("quick" for the paper\'s plan)',
             "the validation set the advice is chosen and confirmed on", evidence),
     PlanKey("campaign", "vertical", "-", "[0, 3]", "0 (horizontal only)",
-            "every pulse and record of the campaign (comparisons, speed sweep, maps, "
+            "every pulse and record of the campaign (comparisons, maps, "
             "evidence, records, fragility, validity map) also moves the ground vertically: "
             "a_v = vertical x its horizontal acceleration, in phase (a record with a vertical "
             "channel of its own keeps it; the stability sweep stays horizontal)", vertical),
@@ -323,10 +296,6 @@ KEYS: tuple[PlanKey, ...] = (
             "--quick: the pulses", pulse_shapes),
     PlanKey("quick", "pulse_tail", "s", f"(0, {_SECONDS:g}]", "2", "--quick: the pulse tail",
             seconds),
-    PlanKey("quick", "dt_sweep", "s", "distinct time steps", "the second and third",
-            "--quick: the time steps", time_steps),
-    PlanKey("quick", "dt_tail", "s", f"(0, {_SECONDS:g}]", "2",
-            "--quick: the tail of the time-step case", seconds),
     PlanKey("quick", "free_duration", "s", f"(0, {_SECONDS:g}]", "3",
             "--quick: free rocking", seconds),
     PlanKey("quick", "max_records", "-", "an integer in [1, 10000]", "1",
@@ -402,8 +371,6 @@ def _scene_refs(c: Mapping[str, Any]) -> list[tuple[str, str]]:
     for k in ("choice_scene", "stress_scene", "stress_hybrid_scene"):
         if c.get(k) is not None:
             out.append((k, c[k]))
-    if "dt_case" in c:
-        out.append(("dt_case.scene", c["dt_case"]["scene"]))
     out += [("fracture_cases", r[0]) for r in c.get("fracture_cases", ())]
     out += [("record_frames", s) for s in dict(c.get("record_frames", {})).values()]
     m, q = c.get("maps") or {}, c.get("quick") or {}
@@ -428,8 +395,6 @@ def resolve_scenes(c: Mapping[str, Any], folder: str | Path) -> dict[str, Any]:
     for k in ("choice_scene", "stress_scene", "stress_hybrid_scene"):
         if out.get(k) is not None:
             out[k] = fix(out[k])
-    if "dt_case" in out:
-        out["dt_case"] = dict(out["dt_case"], scene=fix(out["dt_case"]["scene"]))
     if "fracture_cases" in out:
         out["fracture_cases"] = [[fix(r[0]), *r[1:]] for r in out["fracture_cases"]]
     if "record_frames" in out:
@@ -511,7 +476,6 @@ def markdown() -> str:
     for key in ("A", "W", "map_cells"):
         lim = LIMITS[key]
         out.append(f"| {key} | {lim.describe(lim.lo, lim.hi)} | `{lim.env}` |")
-    out.append(f"| time step | [{_DT[0]:g}, {_DT[1]:g}] s | |")
     out.append(f"| durations and tails | (0, {_SECONDS:g}] s | |")
     return "\n".join(out) + "\n"
 

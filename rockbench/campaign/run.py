@@ -2,32 +2,29 @@
 
 Plan -> sweep -> compare tables -> report. :func:`run_campaign` runs every available backend
 against the analytic reference on the paper's frames and writes one self-contained page, the
-tables as CSV and the figures as PNG. Its parts (the plan: :func:`campaign_plan`, from the case
-catalogue ``rockbench/scenarios/cases.toml``; ``docs/report.md`` describes the page and every
+tables as CSV and the figures as PNG. Its parts (the plan: :func:`campaign_plan`, from
+``rockbench/scenarios/paper-plan.toml``; ``docs/report.md`` describes the page and every
 table):
 
-1. **Pulse cases** - the paper's symmetric and asymmetric frames, free-standing and hybrid
-   (scenes :data:`SCENES`), under symmetric and antisymmetric Ricker pulses of both signs at the
-   (A, W) points :data:`PULSE_POINTS`: one :func:`rockbench.comparison.compare` per case (rotation
-   histories, nrmse, peak error, eta, verdicts, cost).
-2. **Free rocking** - every scene released from phi0 = :data:`FREE_PHI0_OVER_ALPHA` alpha: the
-   effective eta of each engine per rocking direction against the analytic eta.
-3. **Overturning map** - :data:`MAP_SCENE` under positive symmetric pulses on the coarse grid
-   :data:`MAP_A` x :data:`MAP_W`, every backend (via :func:`rockbench.sweep.run_cases`): where
-   an engine's verdict differs from the analytic one.
-4. **Speed against accuracy** - one pulse case per engine at the plan's time steps (``dt_sweep``):
-   nrmse and peak error against the real-time factor.
-   **Fracture cases** - hybrid frames under the pulses of ``fracture_cases`` where the
-   analytic model fractures the tendons (one survives, two overturn): whether each engine
-   fractures when the analytic model does, and when (``fracture_agrees``,
-   ``t_fracture_error``).
-5. **Records** (only with ``records_dir``) - peak rotation per record for the free-standing and
-   the hybrid (eps_f = 1 %) asymmetric frame, both polarities, as in the paper's Fig. 9 (via
-   :func:`rockbench.sweep.run_cases`).
+1. **Pulse cases** - the plan's scenes under symmetric and antisymmetric Ricker pulses of
+   both signs at the plan's (A, W) points: one :func:`rockbench.comparison.compare` per case
+   (rotation histories, nrmse, peak error, eta, verdicts, cost).
+2. **Free rocking** - every scene released from ``free_phi0`` alpha: the effective eta of each
+   engine per rocking direction against the analytic eta.
+3. **Fracture cases** - hybrid frames under the pulses of ``fracture_cases`` where the analytic
+   model fractures the tendons: whether each engine fractures when the analytic model does,
+   and when (``fracture_agrees``, ``t_fracture_error``).
+4. **Maps** (:mod:`rockbench.campaign.maps`) - overturning maps, analytic and per engine.
+5. **The decision** (:mod:`rockbench.campaign.choice`) - the search of ``rockbench advise``
+   over the tolerance ladder and the stability sweep; its work-precision (every engine over
+   its time steps on the decision's evidence) is the report's speed against accuracy.
+6. **Records** - peak rotation per record and frame, both polarities (the paper's Fig. 9).
+7. **Fragility** and **the validity map** (:mod:`rockbench.campaign.fragility`,
+   :mod:`rockbench.studies.validity_map`).
 
-The comparisons (parts 1, 2, 4) run through the one executor (:mod:`rockbench.sweep.executors`)
+The comparisons (parts 1-3) run through the one executor (:mod:`rockbench.sweep.executors`)
 and are kept, as small pickles, in the one store (:mod:`rockbench.sweep.store`), under a
-fingerprint of the physics code (:func:`code_fingerprint`), beside the sweep cases (parts 3, 5).
+fingerprint of the physics code (:func:`code_fingerprint`), beside the sweep cases.
 A rerun, e.g. after Ctrl-C, reuses what finished; after a change to a backend, the scene model
 or an engine version, everything runs again.
 """
@@ -223,12 +220,10 @@ class CampaignTables:
     names: list[str]
     states: list[dict[str, Any]]
     payloads: list[dict[str, Any]]
-    dt_payloads: list[dict[str, Any]]
     metrics: pd.DataFrame
     eta: pd.DataFrame
     eta_summary: pd.DataFrame
     engines: pd.DataFrame
-    speed: pd.DataFrame
     records: pd.DataFrame
     maps: dict[str, Any]
     choice: dict[str, Any]
@@ -254,7 +249,7 @@ class CampaignTables:
         """The CSV tables of the campaign, by file name (``docs/report.md``)."""
         out = {"metrics.csv": self.metrics, "eta.csv": self.eta,
                "eta_summary.csv": self.eta_summary, "engines.csv": self.engines,
-               "speed_accuracy.csv": self.speed, "map_agreement.csv": self.maps["agreement"],
+               "map_agreement.csv": self.maps["agreement"],
                "tradeoff.csv": self.choice["tradeoff"], "advice.csv": self.choice["advice"]}
         if len(self.records):
             out["record_peaks.csv"] = self.records
@@ -289,8 +284,8 @@ def run_campaign(out_dir: str | os.PathLike = "reports", *, engines: Sequence[st
         ``records.csv`` with their dt): the peak rotation per record (paper Fig. 9), with the
         analytic model's sensitivity band of each. Default: the records bundled in the package
         (``rockbench/records``), except with ``quick``.
-    quick : the quick form of the plan: a few cases, the quick evidence, the fast engines'
-        maps only, no stability sweep or fragility; it still decides.
+    quick : the quick form of the plan: a few cases, the quick evidence, an analytic map
+        and no engine map, no stability sweep or fragility; it still decides.
     progress : progress bars naming what runs.
     store : folder of the resumable store (default ``out_dir/store``).
     executor : "process" (local process pool, one worker per core), "serial", or "dask"
@@ -411,7 +406,7 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
     lanes = LANES if executor == "process" and (workers or 2) > 1 else [list(PARTS)]
     got = run_parts(parts, timings, lanes=lanes)
     timings = {k: timings[k] for k in PARTS}
-    payloads, dt_payloads = got["comparisons"], got["speed"]
+    payloads = got["comparisons"]
     maps, choice, frag, validity = got["maps"], got["choice"], got["fragility"], got["validity map"]
     records, record_notes = got["records"]
     notes.extend(record_notes)
@@ -419,9 +414,6 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
         if "error" in p:
             notes.append(f"{p['label']} failed: {p['error']}")
     payloads = [p for p in payloads if "error" not in p]
-    speed_tab = T.speed_table(
-        {"backend": p["job"]["engine"], "dt": p["job"]["dt"], "status": "error",
-         "reason": p["error"]} if "error" in p else p["row"] for p in dt_payloads)
 
     # tables -----------------------------------------------------------------------------
     metrics = T.metrics_table(payloads)
@@ -432,8 +424,8 @@ def measure_campaign(out_dir: str | os.PathLike = "reports", *,
             df["scene"] = df["scene"].map(lambda r: labels.get(r, r))
     engines_tab = T.engine_summary(metrics, eta_summary, maps["agreement"])
     return CampaignTables(plan=dict(plan, labels=labels), names=names, states=states,
-                          payloads=payloads, dt_payloads=dt_payloads, metrics=metrics, eta=eta,
-                          eta_summary=eta_summary, engines=engines_tab, speed=speed_tab,
+                          payloads=payloads, metrics=metrics, eta=eta,
+                          eta_summary=eta_summary, engines=engines_tab,
                           records=records, maps=maps, choice=choice, fragility=frag,
                           validity=validity, notes=notes, labels=labels, timings=timings,
                           quick=quick,

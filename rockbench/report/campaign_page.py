@@ -18,9 +18,6 @@ from .tables import CAMPAIGN_COLUMNS
 #: The columns of record_peaks.csv the page shows (the file has them all).
 RECORD_SHOWN = ("record", "frame", "polarity", "backend", "status", "max_abs_phi_over_alpha",
                 "band_low", "band_high", "within_band", "overturned", "verdict_agrees")
-#: The columns of speed_accuracy.csv the page shows (the file has them all).
-SPEED_SHOWN = ("backend", "dt", "status", "nrmse", "peak_rel_error", "n_impacts",
-               "n_impacts_ref", "verdict_agrees", "cpu_per_sim_s", "ref_cpu_per_sim_s")
 
 __all__ = ["page_sections", "runtime_html", "render", "fracture_html", "band_summary_html",
            "SECTION_ORDER", "ordered"]
@@ -29,9 +26,8 @@ __all__ = ["page_sections", "runtime_html", "render", "fracture_html", "band_sum
 #: per question, the choice's details, maps and fragility, then settings, tables and run time.
 SECTION_ORDER = ("decision-section", "conclusion-section", "summary-section",
                  "histories-section", "cases-section", "fracture-section", "eta-section",
-                 "speed-section", "records-section", "choice-section",
-                 "maps-section", "validity-section", "fragility-section", "settings-section", "files-section",
-                 "runtime-section")
+                 "records-section", "choice-section", "maps-section", "validity-section",
+                 "fragility-section", "settings-section", "files-section", "runtime-section")
 
 
 def ordered(sections: Mapping[str, tuple[str, str]]) -> list[tuple[str, str, str]]:
@@ -143,14 +139,14 @@ def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tupl
     """The sections (id -> (title, html)) of the campaign page that a campaign's tables ``t``
     make (:class:`rockbench.campaign.run.CampaignTables`, read by attribute: ``plan``,
     ``names``, ``states``, ``payloads`` (each with a ``label``), ``metrics``, ``eta_summary``,
-    ``engines``, ``speed``, ``records``, ``notes``, ``quick``, ``records_dir``, ``store_dir``,
+    ``engines``, ``records``, ``notes``, ``quick``, ``records_dir``, ``store_dir``,
     ``fingerprint``); figures are written under ``figdir``. The campaign adds its other parts'
     sections and :func:`ordered` puts them in place. ``lines``: the findings in words;
     ``engine_versions``: backend name -> version (or why it is unavailable); ``files``: the
     CSV files written."""
     plan, names, payloads = t.plan, t.names, t.payloads
     metrics, eta_summary, engines_tab = t.metrics, t.eta_summary, t.engines
-    speed, records, notes = t.speed, t.records, t.notes
+    records, notes = t.records, t.notes
     quick, records_dir, store_dir = t.quick, t.records_dir, t.store_dir
     fingerprint, engine_states = t.fingerprint, t.states
     units = {**METRIC_COLUMNS, **DERIVED_COLUMNS}
@@ -258,24 +254,6 @@ def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tupl
     sections["eta-section"] = ("Coefficient of restitution", "\n".join(etah) or
                      "<p>No free-rocking run finished.</p>")
 
-    # speed
-    sp = []
-    if len(speed):
-        rows = speed[speed["status"] == "ok"]
-        dc = plan["dt_case"]
-        sp.append(H.figure_html(
-            F.plot_speed_accuracy(rows, error="nrmse",
-                                  title=f"Speed against accuracy: {_label(dc['scene'])}, "
-                                        f"{dc['shape']} pulse {dc['sign']:+d}, A = {dc['A']:g}, "
-                                        f"W = {dc['W']:g}"),
-            "nrmse [-] against the cost in process CPU s per simulated s (the decision's cost "
-            "unit; one run each, numba compiling apart) for each engine at the time steps "
-            f"{', '.join(f'{d:g}' for d in plan['dt_sweep'])} s. Dotted line: the analytic "
-            "reference on the same case.", name="speed_accuracy", png_dir=figdir))
-        sp.append(H.html_table(speed, [c for c in SPEED_SHOWN if c in speed], units=units))
-    sections["speed-section"] = ("Speed against accuracy", "\n".join(sp) or
-                     "<p>No engine besides the analytic reference.</p>")
-
     # records
     if len(records):
         sections["records-section"] = ("Records (paper Fig. 9)", H.figure_html(
@@ -306,7 +284,6 @@ def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tupl
                  "pulse and record (a record's own vertical channel where it has one); the "
                  "stability sweep is horizontal" if plan.get("vertical")
                  else "none (horizontal only)")),
-             ("time steps [s]", ", ".join(f"{d:g}" for d in plan["dt_sweep"])),
              ("records folder", str(records_dir) if records_dir else "none"),
              ("quick", str(bool(quick))), ("store", str(store_dir)),
              ("code fingerprint", fingerprint)]
@@ -314,8 +291,8 @@ def page_sections(t, lines, figdir, *, engine_versions, files) -> dict[str, tupl
     for p in payloads:
         for k, v in p.get("settings", {}).items():
             default_settings.setdefault(k, v)
-    sett = (H._dl(items) + "<h3>Backend settings (defaults, all cases but the time-step sweep)"
-            "</h3>" + H._dl((f"settings {k}", v) for k, v in default_settings.items())
+    sett = (H._dl(items) + "<h3>Backend settings (defaults: every comparison; the decision "
+            "tries its own)</h3>" + H._dl((f"settings {k}", v) for k, v in default_settings.items())
             + "<h3>Engines</h3>" + engines_state_html(engine_states)
             + "<h3>Versions</h3>" + H.versions_html(engine_versions))
     sections["settings-section"] = ("Settings and versions", sett)

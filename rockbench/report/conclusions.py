@@ -30,14 +30,8 @@ def _groups(df: pd.DataFrame, hybrid: Mapping[str, bool],
     return [(k, v) for k, v in out if len(v)]
 
 
-def _cpu(row) -> str:
-    """A speed-sweep row's cost in words (process CPU s per simulated s of the one run)."""
-    v = float(row.get("cpu_per_sim_s", float("nan")))
-    return f"{v:.3g} CPU s per simulated s" if v == v else "an unmeasured cost"
-
-
 def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summary: pd.DataFrame,
-                        speed: pd.DataFrame, records: pd.DataFrame, *,
+                        records: pd.DataFrame, *,
                         hybrid: Mapping[str, bool] | None = None,
                         noun: str = "frames") -> list[str]:
     """Plain-language findings computed from the campaign's tables (numbers: nrmse and
@@ -126,22 +120,6 @@ def campaign_conclusion(engines: pd.DataFrame, metrics: pd.DataFrame, eta_summar
                 lines.append(f"Energy gained at an impact (an effective eta >= 1, or kinetic "
                              f"energy that grows across an impact), {b}: " + ", ".join(parts)
                              + " (pulse cases).")
-    if len(speed):
-        for b in [x for x in F._order(speed["backend"]) if x != "analytic"]:
-            s = speed[(speed["backend"] == b)].sort_values("dt")
-            okk = s[s["status"] == "ok"]
-            if len(okk) >= 2:
-                lo, hi = okk.iloc[0], okk.iloc[-1]
-                best = okk.loc[okk["nrmse"].astype(float).idxmin()]
-                lines.append(f"Time step ({b}): dt = {hi['dt']:g} s gives nrmse "
-                             f"{hi['nrmse']:.3g} at {_cpu(hi)}; dt = {lo['dt']:g} s gives "
-                             f"{lo['nrmse']:.3g} at {_cpu(lo)}; the smallest "
-                             f"nrmse, {best['nrmse']:.3g}, at dt = {best['dt']:g} s.")
-            for _, r in s[s["status"] == "error"].iterrows():
-                lines.append(f"{b} at dt = {r['dt']:g} s was not run: {r.get('reason') or ''}.")
-            for _, r in s[~s["status"].isin(["ok", "error"])].iterrows():
-                lines.append(f"{b} at dt = {r['dt']:g} s did not finish cleanly "
-                             f"({r['status']}): {r.get('reason') or ''}.")
     if len(records):
         ref = records[records["backend"] == "analytic"]
         for frame, g in ref.groupby("frame", sort=False):

@@ -45,7 +45,6 @@ __all__ = [
     "plot_histories",
     "plot_history_grid",
     "plot_record_peaks",
-    "plot_speed_accuracy",
     "legend_below",
     "plot_summary_table",
     "png_bytes",
@@ -476,55 +475,6 @@ def plot_summary_table(table: pd.DataFrame, columns: Sequence[str] | None = None
             cell.set_height((3.0 if r == 0 else 1.4) / units)
     if title:
         ax.set_title(title, fontsize=10)
-    return fig
-
-
-# ------------------------------------------------------------------------------------------
-# Speed against accuracy
-# ------------------------------------------------------------------------------------------
-def plot_speed_accuracy(df: pd.DataFrame, *, error: str = "nrmse",
-                        cost: str = "cpu_per_sim_s", title: str | None = None) -> Figure:
-    """Speed against accuracy per engine, in the decision's own cost unit: process CPU s per
-    simulated s (x, log, left = cheaper; the ``cost`` column) against an error measure (y,
-    log), one line per engine through its time steps, each point labelled with dt [s].
-
-    ``df`` columns: backend, dt [s], ``cost`` [s/s], the ``error`` column (nrmse or
-    peak_rel_error, taken in absolute value) and optionally ``ref_`` + ``cost`` (the analytic
-    reference on the same case), drawn as a vertical line. The legend sits below the panel.
-    """
-    fig = Figure(figsize=(8.0, 5.2), layout="constrained")
-    ax = fig.subplots()
-    label = {"nrmse": "nrmse: RMS (phi - phi_ref) / alpha [-]",
-             "peak_rel_error": "|max|phi| / max|phi_ref| - 1| [-]"}.get(error, error)
-    for name in _order(df["backend"]) if len(df) else []:
-        s = df[df["backend"] == name].sort_values("dt")
-        if cost not in s or name == "analytic":
-            continue
-        x = s[cost].to_numpy(float)
-        y = np.abs(s[error].to_numpy(float))
-        y = np.where(y > 0, y, np.nan)
-        ax.plot(x, y, marker="o", color=engine_color(name), label=name)
-        for xi, yi, dt in zip(x, y, s["dt"]):
-            if np.isfinite(xi) and np.isfinite(yi):
-                ax.annotate(f"{float(dt):g}", (xi, yi), fontsize=7,
-                            textcoords="offset points", xytext=(4, 4))
-    ref = f"ref_{cost}"
-    if ref in df and df[ref].notna().any():
-        r = float(df[ref].dropna().median())
-        ax.axvline(r, color="k", lw=1.5, ls=":", label=f"analytic reference ({r:.3g} s/s)")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("cost: process CPU s per simulated s [s/s] (left = cheaper)\n"
-                  "labels: the engine's time step dt [s]")
-    if error in _GRADES:
-        good, fair = _GRADES[error]
-        ax.axhline(good, color="#2e7d32", lw=0.8, ls="--", label=f"good <= {good:g}")
-        ax.axhline(fair, color="#ef6c00", lw=0.8, ls="--", label=f"fair <= {fair:g}")
-    ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    ax.set_ylabel(label + "\n(down = more accurate)")
-    legend_below(fig)
-    if title:
-        fig.suptitle(title, fontsize=10)
     return fig
 
 

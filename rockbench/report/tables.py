@@ -13,8 +13,8 @@ import pandas as pd
 
 from . import figures as F
 
-__all__ = ["CAMPAIGN_COLUMNS", "SPEED_COLUMNS", "metrics_table", "eta_tables",
-           "engine_summary", "speed_table", "sweep_rows", "with_verdicts"]
+__all__ = ["CAMPAIGN_COLUMNS", "metrics_table", "eta_tables",
+           "engine_summary", "sweep_rows", "with_verdicts"]
 
 #: Columns of the campaign's CSV files (beyond the METRIC_COLUMNS / ETA_COLUMNS they repeat).
 CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
@@ -58,18 +58,6 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "cpu_per_sim_s_median": "s/s, median over the ok pulse cases of the process CPU s per "
                                 "simulated s of one run (the decision measures cost with "
                                 "repeats: advice.csv)"},
-    "speed_accuracy.csv": {
-        "backend": "-", "dt": "s, time step", "output_dt": "s, output interval",
-        "status": "-", "nrmse": "-", "peak_rel_error": "-", "max_abs_error_over_alpha": "-",
-        "real_time_factor": "-, simulated s per wall s of stepping",
-        "run_s": "s, whole run (model building and per-step work included)",
-        "run_real_time_factor": "-, simulated s per wall s of the whole run",
-        "sim_time": "s, simulated time",
-        "ref_real_time_factor": "-, the analytic reference on the same case (integration only)",
-        "ref_run_real_time_factor": "-, the analytic reference, whole run",
-        "cpu_s": "s, process CPU time of the engine's whole run (numba compiling apart)",
-        "cpu_per_sim_s": "s/s, cpu_s per simulated second: the cost the decision ranks by",
-        "ref_cpu_per_sim_s": "s/s, the same for the analytic reference on the same case"},
     "map_agreement.csv": {
         "scene": "-", "backend": "-", "grid": "-, NA x NW x pulses of the engine's map",
         "cells": "-, cells compared (ok in both maps)",
@@ -148,7 +136,7 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
                        "run: some analytic run of the band overturns too)",
         "band_distance": "-, signed distance of the peak to the band, in alpha (0 inside)"},
     "runtime.csv": {
-        "part": "-, a part of the campaign (comparisons, speed, maps, choice, records, "
+        "part": "-, a part of the campaign (comparisons, maps, choice, records, "
                 "fragility, validity map, report = the page and its figures), or total",
         "wall_s": "s, wall-clock seconds of the part in this run",
         "cpu_s": "s, CPU seconds (user + system) of the process and its workers during the "
@@ -156,14 +144,6 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
         "workers": "-, worker processes the campaign used",
         "processor": "-, the machine's processor (rockbench.machine.cpu_name)"},
 }
-
-#: Columns of ``speed_accuracy.csv``, in order.
-SPEED_COLUMNS = ["backend", "dt", "output_dt", "status", "reason", "nrmse", "peak_rel_error",
-                 "max_abs_error_over_alpha", "n_impacts", "n_impacts_ref", "eta_max_rel_error",
-                 "verdict_agrees", "real_time_factor", "wall_s", "steps", "run_s",
-                 "run_real_time_factor", "sim_time", "engine_version",
-                 "ref_real_time_factor", "ref_run_real_time_factor", "cpu_s", "cpu_per_sim_s",
-                 "ref_cpu_per_sim_s"]
 
 
 def _bool(v: Any) -> bool | None:
@@ -283,15 +263,6 @@ def eta_tables(payloads: Iterable[Mapping[str, Any]]) -> tuple[pd.DataFrame, pd.
                                 else math.nan})
     eta = pd.concat(per_impact, ignore_index=True) if per_impact else pd.DataFrame()
     return eta, pd.DataFrame(summary)
-
-
-def speed_table(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
-    """``speed_accuracy.csv`` from the time-step rows (missing columns NaN)."""
-    speed = pd.DataFrame(list(rows))
-    for c in SPEED_COLUMNS:
-        if c not in speed:
-            speed[c] = math.nan
-    return speed[SPEED_COLUMNS]
 
 
 def engine_summary(metrics: pd.DataFrame, eta_summary: pd.DataFrame,
