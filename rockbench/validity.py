@@ -42,8 +42,9 @@ from .constants import G
 __all__ = ["DEFAULT_FRICTION", "INSIDE", "Validity", "friction_of", "beam_friction_of",
            "pga_limit", "lift_off_time", "motion_validity", "run_validity"]
 
-#: Coulomb friction of the base contact when a scene gives none [-] (every engine's contact
-#: takes it, ``EngineSettings.friction``).
+#: Coulomb friction of the base contact the validity rule assumes when a scene gives none [-]
+#: (each engine's own default ``friction`` is at least this, docs/engines/README.md, so a case
+#: inside the model with it is inside for every engine).
 DEFAULT_FRICTION = 1.0
 
 #: The word for a case inside the model's assumptions.

@@ -252,7 +252,7 @@ def test_quick_campaign_page(quick):
     assert figs == sorted(["histories_paper-asymmetric.png",
                            "histories_paper-asymmetric-hybrid-eps1.png", "eta_free_rocking.png",
                            "eta_per_impact.png", "record_peaks.png", "maps_analytic.png",
-                           "work_precision.png"])
+                           "work_precision.png", "validity_map.png"])
     assert n == len(figs)
     for p in (path.parent / "figures").glob("*.png"):
         assert png_size(p.read_bytes())[0] > 100

@@ -217,6 +217,7 @@ def test_progress_bar_names_the_running_case(capsys, monkeypatch):
     from rockbench import progress
 
     monkeypatch.setattr(progress, "INTERVAL", 0.0)   # off a terminal: a line per update
+    monkeypatch.setattr(progress, "_quiet", False)   # a CLI test's --quiet in this process
     run_cases(_grid()[:1], executor="serial", progress=True)
     err = capsys.readouterr().err
     assert "sweep" in err and "analytic housner-block symm+ A=3 W=4" in err

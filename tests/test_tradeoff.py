@@ -160,10 +160,11 @@ def test_a_mirror_symmetric_structure_has_no_mirror_twins_in_its_evidence():
     """On Housner's block (its own mirror image) a case and its sign-flipped twin are the same
     physics: the evidence keeps one sign, so no held-out case mirrors a choice case. The
     asymmetric frame keeps both signs."""
-    from rockbench.studies.validation import mirror_symmetric
+    from rockbench.studies.map_cells import reversed_mirrors
 
-    assert mirror_symmetric(BLOCK)
-    assert not mirror_symmetric(rb.load_scene("paper-asymmetric"))
+    assert reversed_mirrors(BLOCK) and not reversed_mirrors(BLOCK, 0.3)
+    assert not reversed_mirrors(rb.load_scene("paper-asymmetric"))
+    assert reversed_mirrors("paper-symmetric")
     for c in T.validation_set(BLOCK, size="full"):
         if c.motion is None:
             assert c.phi0 > 0

@@ -259,14 +259,50 @@ friction = 0.3
 """
 
 
-def test_a_users_plan_asks_for_the_map_only_when_its_scene_gives_a_friction(tmp_path):
-    from rockbench.campaign.plan import plan_for_scenes
+def test_every_plan_maps_where_the_model_holds_on_its_decisions_scene(tmp_path):
+    from rockbench.campaign.plan import campaign_plan, plan_for_scenes
 
     f = tmp_path / "friction-block.toml"
     f.write_text(SCENE_WITH_FRICTION, encoding="utf-8")
     spec = plan_for_scenes([str(f)], quick=True, folder=tmp_path)["validity_map"]
     assert spec["grid"] == 5 and spec["scene"] == str(f)
-    assert plan_for_scenes(["housner-block"], quick=True, folder=tmp_path)["validity_map"] is None
+    # a scene without its own friction is mapped with the engines' common default
+    spec = plan_for_scenes(["housner-block"], folder=tmp_path)["validity_map"]
+    assert spec["grid"] == 8 and spec["scene"] == "housner-block"
+    paper = campaign_plan()
+    assert paper["validity_map"]["scene"] == paper["choice_scene"] == "paper-asymmetric"
+    assert campaign_plan(quick=True)["validity_map"]["grid"] == 5
+
+
+def test_the_section_runs_the_fast_engines_and_names_the_others(tmp_path, monkeypatch):
+    """Outside the model the default report runs the fast engines (every engine with --full)
+    and says which it left out; a scene without friction is said to use the default."""
+    from rockbench.campaign import parts as P
+    from rockbench.report.validity_figures import validity_sentences
+
+    seen = {}
+
+    def fake(scene, *, engines, **kw):
+        seen["engines"], seen["friction"] = list(engines), scene.friction
+        return pd.DataFrame({"region": ["model", "agree"], "cheapest": [None, engines[0]]})
+
+    monkeypatch.setattr("rockbench.studies.validity_map.validity_map", fake)
+    monkeypatch.setattr("rockbench.campaign.maps.is_fast", lambda e: e in ("pymunk", "mujoco"))
+    spec = {"scene": "housner-block", "grid": 2, "tail": 0.5}
+    names = ["analytic", "pymunk", "mujoco", "drake", "opensees"]
+    sec = P._validity_section(spec, names, tmp_path, 1, False)
+    assert seen["engines"] == ["pymunk", "mujoco"] and sec["left_out"] == ["drake", "opensees"]
+    assert sec["friction_given"] is False and seen["friction"] == 1.0   # every engine alike
+    words = " ".join(validity_sentences(sec["frame"], friction=sec["friction"], tolerance=0.1,
+                                        engines=sec["engines"], friction_given=False,
+                                        left_out=sec["left_out"]))
+    assert ("holds with mu = 1, the validity rule's default, given to every engine for this "
+            "map (the scene gives none)") in words
+    assert "Not run outside the model here: drake, opensees" in words
+    P._validity_section(spec, names, tmp_path, 1, False, every_engine=True)
+    assert seen["engines"] == names[1:]
+    P._validity_section(spec, ["analytic", "drake"], tmp_path, 1, False)
+    assert seen["engines"] == ["drake"]                 # no fast engine: the ones chosen
 
 
 @needs_engine

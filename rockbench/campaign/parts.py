@@ -15,6 +15,7 @@ import pandas as pd
 from ..report import tables as T
 from ..runner import REFERENCE
 from ..scene.records import find_records
+from ..studies.map_cells import reversed_mirrors
 from ..sweep import store as S
 from ..run_length import pulse_run_length, run_length
 from .run import _comparisons, _sweep
@@ -33,11 +34,11 @@ def _part_comparisons(c: dict[str, Any]) -> list[dict[str, Any]]:
     jobs = []
     shapes = {(shape, int(sign)) for shape, sign in plan["pulse_shapes"]}
     for scene in plan["scenes"]:
-        mirror = _mirror_symmetric(scene) and not vr    # a vertical part turns with the sign
+        mirror = reversed_mirrors(scene, _ratio(plan))
         for (A, W) in plan["pulse_points"]:
             for shape, sign in plan["pulse_shapes"]:
                 if mirror and int(sign) == -1 and (shape, 1) in shapes:
-                    continue      # the mirror image of the +1 case (Scene.mirror_symmetric)
+                    continue      # the mirror image of the +1 case
                 jobs.append({"kind": "pulse", "scene": scene, "engines": names,
                              "motion": {"kind": "ricker", "shape": shape, "sign": int(sign),
                                         "A": float(A), "W": float(W), **vr},
@@ -71,13 +72,6 @@ def _p(scene: Any) -> float:
     from ..scene import load_scene
 
     return load_scene(scene).p
-
-
-def _mirror_symmetric(scene: Any) -> bool:
-    """Whether a plan's scene is its own mirror image (its reversed pulses are not run)."""
-    from ..scene import Scene, load_scene
-
-    return (scene if isinstance(scene, Scene) else load_scene(scene)).mirror_symmetric
 
 
 def _part_maps(c: dict[str, Any]) -> dict[str, Any]:
@@ -133,10 +127,12 @@ def _part_fragility(c: dict[str, Any]) -> dict[str, Any]:
 
 
 def _part_validity(c: dict[str, Any]) -> dict[str, Any]:
-    """8: where the analytic model holds (a user's scene with its own friction)."""
+    """8: where the analytic model holds (the decision's scene, with its own friction or the
+    engines' common default): the fast engines outside the model, every engine with
+    ``--full``."""
     return _validity_section(c["plan"].get("validity_map"), c["names"], c["store_dir"],
                              c["run"]["workers"], c["run"]["progress"],
-                             _ratio(c["plan"]))
+                             _ratio(c["plan"]), every_engine=bool(c.get("full")))
 
 
 #: The parts of a campaign, in the order of the page's run-time table.
@@ -150,20 +146,35 @@ LANES = [["comparisons", "fragility", "validity map"],
 
 def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], store_dir: Path,
                       workers: int | None, progress: bool,
-                      vertical: float = 0.0) -> dict[str, Any]:
+                      vertical: float = 0.0, every_engine: bool = False) -> dict[str, Any]:
     """The validity map of the plan's ``validity_map`` (``scene``, ``grid`` n, ``tail`` [s];
-    None: none) with the campaign's engines and the plan's vertical ratio, as the page's
-    section wants it (:func:`rockbench.report.validity_figures.validity_html`); {} without
-    one."""
+    None: none) with the plan's vertical ratio, as the page's section wants it
+    (:func:`rockbench.report.validity_figures.validity_html`); {} without one. Outside the
+    model run the campaign's fast engines (:func:`rockbench.campaign.maps.is_fast`; all of
+    them when none is fast), or all of them with ``every_engine``; ``left_out`` names the
+    others."""
     if not spec:
         return {}
     from ..scene import load_scene
     from ..studies.validity_map import default_axes, validity_map
     from ..validity import friction_of
 
+    from .maps import is_fast
+
     scene = load_scene(spec["scene"])
+    given = scene.friction is not None
+    if not given:       # the rule's default, given to every engine alike for this map
+        import dataclasses
+
+        from ..scene.contact import Contact
+        from ..validity import DEFAULT_FRICTION
+
+        scene = dataclasses.replace(scene, contact=Contact(friction=DEFAULT_FRICTION))
     engines = [e for e in names if e != REFERENCE]
+    fast = engines if every_engine else [e for e in engines if is_fast(e)] or engines
+    left_out, engines = [e for e in engines if e not in fast], fast
     out = {"scene": scene.name, "friction": friction_of(scene), "tolerance": 0.10,
+           "friction_given": given, "left_out": left_out,
            "a_mu": friction_of(scene) / math.tan(scene.alpha),
            "engines": engines, "shape": "symmetric", "sign": 1, "tail": spec["tail"],
            "vertical": vertical}

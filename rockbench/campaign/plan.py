@@ -157,14 +157,18 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
                  "engine_amplitude": f"1:{hi:g}", "engine_frequency": "1:10",
                  "engine_tail": 3.0, "measured_grid": (12, 12), "full_grid": (100, 100),
                  "fast_grids": {_label(first): (6, 6)}},
-        # where the analytic model holds (rockbench.studies.validity_map): only when the
-        # first scene gives its own [contact] friction (without one, the engines' default
-        # friction 1.0 keeps most pulses inside the model, and the map would cost ~1-2 CPU
-        # minutes to say so)
-        "validity_map": ({"scene": first, "grid": 5 if quick else 8, "tail": 3.0}
-                         if sc0.friction is not None else None),
+        # where the analytic model holds (rockbench.studies.validity_map), on the first
+        # scene with its own friction or the engines' common default
+        "validity_map": _validity_spec(first, quick),
     })
     return plan
+
+
+def _validity_spec(scene: str, quick: bool) -> dict[str, Any]:
+    """The validity map of a plan (:mod:`rockbench.studies.validity_map`): on the decision's
+    scene, symmetric pulses + on n x n cells (8, 5 with ``--quick``), 3 s of free rocking
+    after each pulse window."""
+    return {"scene": scene, "grid": 5 if quick else 8, "tail": 3.0}
 
 
 def _read_plan_file(path: str | os.PathLike) -> dict[str, Any]:
@@ -286,6 +290,7 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
             "stress_scene": c.get("stress_scene"),
             "stress_hybrid_scene": c.get("stress_hybrid_scene"),
             "maps": _maps_plan(c.get("maps", {}), c),
+            "validity_map": _validity_spec(str(c.get("choice_scene", c["scenes"][0])), False),
             "description": str(c.get("description", ""))}
     q = c.get("quick", {})
     quick = dict(full, scenes=tuple(q.get("scenes", full["scenes"][:2])),
@@ -297,6 +302,7 @@ def _plans(c: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
                  max_records=int(q.get("max_records", 1)),
                  record_tail=float(q.get("record_tail", 2.0)),
                  record_duration=None,
+                 validity_map=_validity_spec(full["choice_scene"], True),
                  record_frames=dict(c["record_frames"]),
                  fracture_cases=_pairs(q.get("fracture_cases", ()),
                                        (str, str, int, float, float)))

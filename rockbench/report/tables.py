@@ -78,7 +78,7 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
                                "(one row per engine and setting the decision's search ran)"},
     "validity_map.csv": {"(then)": "every column of rockbench.studies.validity_map."
                                    "VALIDITY_COLUMNS (one row per cell of the validity map of "
-                                   "a user's scene with its own friction; docs/maps.md)"},
+                                   "the decision's scene; docs/maps.md)"},
     "fragility.csv": {
         "frame": "-, the frame's label", "scene": "-", "backend": "-, a backend, or 'analytic "
         "(whole ladder)': the analytic fit over every step", "ensemble": "-, kind: name of the "

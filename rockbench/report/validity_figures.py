@@ -69,15 +69,19 @@ def plot_validity_map(frame: pd.DataFrame, *, title: str | None = None,
 
 
 def validity_sentences(frame: pd.DataFrame, *, friction: float, tolerance: float,
-                       engines: Sequence[str]) -> list[str]:
+                       engines: Sequence[str], friction_given: bool = True,
+                       left_out: Sequence[str] = ()) -> list[str]:
     """Two or three sentences counting the cells of each region of ``frame`` with the scene's
-    friction ``friction`` [-], the agreement ``tolerance`` [-] and the ``engines`` run outside
-    the model."""
+    friction ``friction`` [-] (``friction_given``: the scene's own; else the engines' common
+    default), the agreement ``tolerance`` [-], the ``engines`` run outside the model and
+    those ``left_out`` of it."""
     n = len(frame)
     c = frame["region"].value_counts()
     k = {r: int(c.get(r, 0)) for r in REGION_COLORS}
-    out = [f"In {k['model']} of {n} cells the analytic model holds with the scene's friction "
-           f"mu = {friction:.3g}: no contact needs more friction than it has and the ground never "
+    whose = (f"the scene's friction mu = {friction:.3g}" if friction_given else
+             f"mu = {friction:.3g}, the validity rule's default, given to every engine for "
+             "this map (the scene gives none)")
+    out = [f"In {k['model']} of {n} cells the analytic model holds with {whose}: no contact needs more friction than it has and the ground never "
            f"falls faster than gravity."]
     outside = n - k["model"]
     if outside:
@@ -92,6 +96,9 @@ def validity_sentences(frame: pd.DataFrame, *, friction: float, tolerance: float
             best = ag["cheapest"].value_counts()
             out.append("Where they agree, the cheapest in CPU time is "
                        + ", ".join(f"{e} in {int(m)} cells" for e, m in best.items()) + ".")
+        if left_out:
+            out.append(f"Not run outside the model here: {', '.join(left_out)} (the slower "
+                       "engines; `rockbench report --full` runs every engine).")
     else:
         out.append("No cell of this grid is outside the model: the analytic model is the "
                    "reference everywhere on it, and no engine had to run.")
@@ -108,7 +115,9 @@ def validity_html(section: Mapping[str, Any], figdir: Any = None) -> str:
         return f"<p>The validity map failed: {H.fmt(section['error'])}</p>"
     df = section["frame"]
     words = validity_sentences(df, friction=section["friction"],
-                               tolerance=section["tolerance"], engines=section["engines"])
+                               tolerance=section["tolerance"], engines=section["engines"],
+                               friction_given=section.get("friction_given", True),
+                               left_out=section.get("left_out", ()))
     sign = "+" if section.get("sign", 1) > 0 else "-"
     caption = (f"{section['scene']}: where the analytic model holds under {section['shape']} "
                f"Ricker pulses ({sign}), {df['A'].nunique()} x {df['W'].nunique()} cells, "

@@ -1,7 +1,8 @@
 """What a map cell is beyond its run: whether its pulse lies outside the analytic model
 (:func:`cell_outside`, the one rule of :mod:`rockbench.validity`), the vertical ratio of a
-map, and the mirror twin of a cell of a mirror-symmetric structure (:func:`mirror_twins`:
-its reversed pulse's answer is the mirror image of the pulse's)."""
+map, when a reversed pulse's answer is the mirror image of the pulse's (:func:`reversed_mirrors`,
+the one rule every study and the campaign use) and the mirror twin of such a cell
+(:func:`mirror_twins`)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,19 @@ from ..errors import ParameterError
 from ..sweep.map_store import cell_key
 
 __all__ = ["check_vertical_ratio", "cell_outside", "mark_outside", "mirror_twins",
-           "with_mirrored"]
+           "with_mirrored", "reversed_mirrors"]
+
+
+def reversed_mirrors(scene: Any, vertical: float = 0.0) -> bool:
+    """True when ``scene``'s response to a reversed (sign -1) motion is the mirror image
+    (phi -> -phi) of its response to the motion, so that one sign answers for both: a
+    mirror-symmetric structure (:attr:`rockbench.scene.Scene.mirror_symmetric`; a scene
+    name or path is loaded) under horizontal motion only (a vertical part ``vertical`` r > 0,
+    in phase with the signed pulse, does not turn with its sign)."""
+    from ..scene import Scene, load_scene
+
+    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    return bool(sc.mirror_symmetric) and not float(vertical or 0.0)
 
 
 def check_vertical_ratio(vertical: Any, name: str = "vertical") -> float:

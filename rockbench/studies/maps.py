@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from .map_cells import (check_vertical_ratio, cell_outside, mark_outside, mirror_twins,
-                        with_mirrored)
+                        reversed_mirrors, with_mirrored)
 from ..errors import ParameterError, RockbenchError
 from ..run_length import pulse_run_length
 from ..sweep.map_store import (COMPACT_EVERY, MAP_COLUMNS, MAP_KEY, cell_key, compact_map_store,
@@ -376,8 +376,7 @@ def _run_cells(sc, scene_ref: Any, ref_name: str, engine: str, settings: dict,
     todo = [c for c in cells if cell_key(*c) not in have] if have else list(cells)
     reused = len(cells) - len(todo)
     twins: dict[str, tuple] = {}
-    if engine == "analytic" and sc.mirror_symmetric and not vertical:
-        # (a vertical part in phase with the signed pulse is not mirrored with it)
+    if engine == "analytic" and reversed_mirrors(sc, vertical):
         todo, twins = mirror_twins(todo)
     frames = [done]
     written = [len(part_files(path)) if path is not None else 0]

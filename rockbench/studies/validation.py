@@ -38,8 +38,9 @@ Every case is labelled by its own conditioning, whatever its kind:
   peak; a record by the distance of its peak to the model's sensitivity band; an overturning
   case by its verdict.
 
-On a mirror-symmetric structure (equal thresholds, restitution and fall angles both ways) a
-case and its sign-flipped twin are the same physics: only the positive sign is kept.
+On a mirror-symmetric structure (a block, or a frame with equal columns) a case and its
+sign-flipped twin are the same physics: only the positive sign is kept
+(:func:`rockbench.studies.map_cells.reversed_mirrors`, the one rule).
 
 With a vertical ratio r (``validation_set(vertical=r)``, ``advise --vertical``) every pulse
 and record of the evidence also moves the ground vertically, a_v = r times its horizontal
@@ -73,7 +74,6 @@ from ..validity import motion_validity
 from .map_agreement import NEAR_BOUNDARY_MARGIN
 
 __all__ = ["ValidationCase", "validation_set", "candidate_cases", "overturn_threshold",
-           "mirror_symmetric",
            "uplift_threshold", "SIZES", "GROUP_SIZES", "NEAR_MARGIN", "W_GRID", "SEED",
            "MEASURES"]
 
@@ -288,27 +288,15 @@ def _short(shape: str, sign: int) -> str:
     return f"{'symm' if shape == 'symmetric' else 'anti'}{'+' if sign > 0 else '-'}"
 
 
-def mirror_symmetric(scene) -> bool:
-    """True when the structure is its own mirror image (equal uplift thresholds, restitution
-    coefficients and fall angles both ways): a case and its sign-flipped twin are then the same
-    physics, so the evidence keeps one of them (else a held-out case could be the mirror image
-    of a choice case)."""
-    from ..analytic.reference import reference_of
-
-    ref = reference_of(scene)
-    lam, eta, fall = ref.lam, ref.eta, scene.fall_angles
-    close = lambda a, b: abs(a - b) <= 1e-9 * max(abs(a), abs(b), 1e-300)  # noqa: E731
-    return (close(float(lam[1]), -float(lam[-1])) and close(float(eta[1]), float(eta[-1]))
-            and close(float(fall[1]), float(fall[-1])))
-
-
 @functools.lru_cache(maxsize=16)
 def _candidates(key: str, vertical: float = 0.0) -> tuple[tuple[str, dict[str, Any]], ...]:
     """(group, description) of every candidate case of the scene, in a fixed order (one sign
     only for a mirror-symmetric structure without vertical motion: a pulse's vertical part
     turns with its sign, so the reversed pulse is no mirror image)."""
     scene = _scene_from_key(key)
-    signs = (1,) if mirror_symmetric(scene) and not vertical else (1, -1)
+    from .map_cells import reversed_mirrors
+
+    signs = (1,) if reversed_mirrors(scene, vertical) else (1, -1)
     out: list[tuple[str, dict[str, Any]]] = []
     for f in _FREE_PHI0:
         for s in signs:
