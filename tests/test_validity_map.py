@@ -60,6 +60,21 @@ def test_different_verdicts_disagree_whatever_the_spreads():
     assert classify_cell(runs, tolerance=10.0)["region"] == "disagree"
 
 
+def test_when_every_engine_overturns_the_verdict_alone_decides():
+    """A toppled structure's sliding is the fall's (the paper's frame at mu = 1 under A = 5,
+    W = 1: pymunk 6 cm, MuJoCo 5 mm, both overturned at the same stop angle): the verdict is
+    the agreement, the spreads are still reported; a survivor's sliding still counts."""
+    fell = [_run("a", overturned=True, phi=1.0, sliding=0.061, cpu=2.0),
+            _run("b", overturned=True, phi=1.3, sliding=0.005, cpu=1.0)]
+    c = classify_cell(fell, tolerance=0.10)
+    assert c["region"] == "agree" and c["cheapest"] == "b"
+    assert c["spread_sliding"] > 1.0 and c["spread_phi"] > 0.1
+    stood = [dict(r, overturned=False) for r in fell]
+    assert classify_cell(stood, tolerance=0.10)["region"] == "disagree"
+    one_fell = [fell[0], dict(fell[1], overturned=False)]
+    assert classify_cell(one_fell, tolerance=10.0)["region"] == "disagree"
+
+
 def test_a_run_that_did_not_finish_ok_makes_the_cell_diverged():
     for bad in ("diverged", "invalid", "error"):
         runs = [_run("a"), _run("b", status=bad)]
@@ -266,7 +281,7 @@ def test_every_plan_maps_where_the_model_holds_on_its_decisions_scene(tmp_path):
     f.write_text(SCENE_WITH_FRICTION, encoding="utf-8")
     spec = plan_for_scenes([str(f)], quick=True, folder=tmp_path)["validity_map"]
     assert spec["grid"] == 5 and spec["scene"] == str(f)
-    # a scene without its own friction is mapped with the engines' common default
+    # a scene without its own friction is mapped with the validity rule's default
     spec = plan_for_scenes(["housner-block"], folder=tmp_path)["validity_map"]
     assert spec["grid"] == 8 and spec["scene"] == "housner-block"
     paper = campaign_plan()

@@ -81,7 +81,8 @@ def model_row(t: Any, scene_word: str) -> dict[str, Any] | None:
     scene = load_scene(pick)
     mu, lim = friction_of(scene), pga_limit(scene) / G
     given = ("the scene's friction" if scene.friction is not None
-             else "the engines' common default: the scene gives none")
+             else "the validity rule's default, which every engine's own friction reaches: "
+                  "the scene gives none")
     return {"cpu_per_sim_s": cost,
             "holds": f"PGA <= mu g = {lim:.3g} g with mu = {mu:g} ({given}), no sliding "
                      "onset along the run, contact kept",

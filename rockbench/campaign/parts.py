@@ -1,5 +1,6 @@
-"""The parts of a campaign (``rockbench report``): the case-by-case comparisons, the maps, the decision, the records, fragility and the validity map. Each part is a
-function of the campaign's context (a picklable dict made by
+"""The parts of a campaign (``rockbench report``): the case-by-case comparisons, the maps,
+the decision, the records, fragility and the validity map. Each part is a function of the
+campaign's context (a picklable dict made by
 :func:`rockbench.campaign.run.measure_campaign`), so that a lane of them can run in a process
 of its own (:func:`rockbench.sweep.executors.run_parts`)."""
 
@@ -128,8 +129,8 @@ def _part_fragility(c: dict[str, Any]) -> dict[str, Any]:
 
 def _part_validity(c: dict[str, Any]) -> dict[str, Any]:
     """8: where the analytic model holds (the decision's scene, with its own friction or the
-    engines' common default): the fast engines outside the model, every engine with
-    ``--full``."""
+    validity rule's default mu = 1 given to every engine): the fast engines outside the
+    model, every engine with ``--full``."""
     return _validity_section(c["plan"].get("validity_map"), c["names"], c["store_dir"],
                              c["run"]["workers"], c["run"]["progress"],
                              _ratio(c["plan"]), every_engine=bool(c.get("full")))

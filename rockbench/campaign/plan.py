@@ -158,7 +158,7 @@ def plan_for_scenes(scenes: Sequence[Any], *, quick: bool = False,
                  "engine_tail": 3.0, "measured_grid": (12, 12), "full_grid": (100, 100),
                  "fast_grids": {_label(first): (6, 6)}},
         # where the analytic model holds (rockbench.studies.validity_map), on the first
-        # scene with its own friction or the engines' common default
+        # scene with its own friction or the validity rule's default
         "validity_map": _validity_spec(first, quick),
     })
     return plan

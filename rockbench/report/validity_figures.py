@@ -88,8 +88,9 @@ def validity_sentences(frame: pd.DataFrame, *, friction: float, tolerance: float
         who = ", ".join(engines) if engines else "no engine (none is installed)"
         one = " (one engine: it agrees with itself)" if len(engines) == 1 else ""
         out.append(f"In the other {outside} cells the structure slides or leaves the ground, and "
-                   f"{who} ran{one}: they agree within {100 * tolerance:.0f} % on the verdict, "
-                   f"the peak rotation and the sliding in {k['agree']}, disagree in "
+                   f"{who} ran{one}: they agree (the same verdict, and where the structure "
+                   f"survives, its peak rotation and sliding within {100 * tolerance:.0f} %) "
+                   f"in {k['agree']}, disagree in "
                    f"{k['disagree']}, and at least one diverged or failed in {k['diverged']}.")
         ag = frame[frame["region"] == "agree"]
         if len(ag) and len(engines) > 1:

@@ -18,7 +18,7 @@ Columns of the frame (:data:`VALIDITY_COLUMNS`; ``docs/maps.md``):
   more friction than it has, the ground never falls faster than gravity);
   ``"agree"`` outside the model, and every engine ran (status ``ok``) and they agree
   (:func:`classify_cell`: the same verdict overturned or not, and both spreads at most
-  ``tolerance``); ``"disagree"`` outside, every engine ran, and they do not agree;
+  ``tolerance``, which a cell where every engine overturns does not need); ``"disagree"`` outside, every engine ran, and they do not agree;
   ``"diverged"`` outside, and at least one engine's run diverged, was invalid or failed (or
   no engine could run);
 * ``reason``: the analytic run's validity sentence (``inside``, or "outside the model from
@@ -118,7 +118,10 @@ def classify_cell(runs: Sequence[Mapping[str, Any]], *, tolerance: float = 0.10,
       :func:`relative_spread` of ``max_abs_phi`` (floor ``phi_floor``) <= ``tolerance`` and
       ``spread_sliding`` = that of ``max_sliding`` (floor ``sliding_floor``; runs without one
       left out, NaN when none has one, which does not count against agreement) <=
-      ``tolerance``; one engine alone agrees with itself;
+      ``tolerance``; when every run overturns, the verdict alone (a run's ``max_sliding``
+      then includes the fall, the bodies' slip as they topple and land: a measure of the
+      debris, not of the engine; the spreads are still reported); one engine alone agrees
+      with itself;
     * ``"disagree"`` otherwise.
 
     Returns ``region``, ``spread_phi`` [-], ``spread_sliding`` [-] (over the runs with status
@@ -131,8 +134,9 @@ def classify_cell(runs: Sequence[Mapping[str, Any]], *, tolerance: float = 0.10,
                  for r in ok)
     if not runs or len(ok) < len(runs) or not finite:
         return dict(out, region="diverged")
-    same = len({bool(r.get("overturned")) for r in ok}) == 1
-    if same and sp <= tolerance and not ss > tolerance:
+    verdicts = {bool(r.get("overturned")) for r in ok}
+    fell = verdicts == {True}
+    if len(verdicts) == 1 and (fell or (sp <= tolerance and not ss > tolerance)):
         cpu = [float(r.get("cpu_s", math.inf)) for r in ok]
         return dict(out, region="agree", cheapest=str(ok[int(np.argmin(cpu))]["engine"]))
     return dict(out, region="disagree")
