@@ -87,5 +87,8 @@ def test_a_part_s_sweeps_share_one_pool_of_workers():
     got = run_parts({"p": (_worker_pids_of_two_sweeps, (0,)),
                      "q": (_worker_pids_of_two_sweeps, (0,))}, {}, lanes=[["p", "q"]])
     first, second = got["p"]
-    assert first and first == second and os.getpid() not in first
-    assert not (set(got["q"][0]) & first)
+    # which worker takes which item is the scheduler's: a fresh pool for the second sweep
+    # would bring new processes, so both sweeps together use at most the pool's two
+    assert first and second and os.getpid() not in first | second
+    assert len(first | second) <= 2
+    assert not ((set(got["q"][0]) | set(got["q"][1])) & (first | second))
