@@ -470,3 +470,27 @@ def test_default_records_are_the_bundled_ones():
 
     names = sorted(p.name for p in bundled_dir().glob("*.AT2"))
     assert names == ["IV1940_ElCentro_180.AT2", "IV1979_ElCentroArray4_230.AT2"]
+
+
+def test_the_models_cost_is_its_compiled_path_measured_beside_the_engines(quick):
+    """Every comparison payload carries one compiled-path run's cost of the analytic model
+    (the decision's first row is their median); payloads stored without it fall back to the
+    reference runs' cost in the metrics."""
+    import math
+    from types import SimpleNamespace
+
+    from rockbench.campaign.page import _model_cost
+
+    path, _ = quick
+    t = SimpleNamespace(payloads=[{"model_cpu_per_sim_s": 0.003}, {"model_cpu_per_sim_s": 0.001},
+                                  {"model_cpu_per_sim_s": float("nan")}, {}],
+                        metrics=pd.DataFrame({"backend": ["analytic"], "cpu_per_sim_s": [0.5]}))
+    assert _model_cost(t) == pytest.approx(0.002)
+    assert _model_cost(SimpleNamespace(payloads=[{}], metrics=t.metrics)) == 0.5
+    assert _model_cost(SimpleNamespace(payloads=[], metrics=pd.DataFrame())) is None
+    import pickle
+
+    store = path.parent / "store"
+    pkl = [p for p in store.rglob("comparisons/*.pkl")]
+    costs = [pickle.loads(p.read_bytes()).get("model_cpu_per_sim_s") for p in pkl]
+    assert pkl and all(c is not None and math.isfinite(c) and c > 0 for c in costs)

@@ -70,9 +70,8 @@ def _job_label(job: Mapping[str, Any]) -> str:
 
 def _run_job(job: dict[str, Any]) -> dict[str, Any]:
     """One comparison job (in a worker): returns a small, picklable payload."""
-    from ..comparison import compare, eta_rows, metrics
+    from ..comparison import compare
     from ..report.figures import Trace
-    from ..runner import run
     from ..scene import load_scene
     from ..scene.motion import motion_from_spec
 
@@ -81,39 +80,32 @@ def _run_job(job: dict[str, Any]) -> dict[str, Any]:
     phi0 = float(job.get("phi0_over_alpha", 0.0)) * scene.alpha
     t0 = time.perf_counter()
     c0 = time.process_time()
-    if job["kind"] == "dt":
-        tr = time.perf_counter()
-        ref = run(scene, motion, engine=REFERENCE, duration=job["duration"], phi0=phi0)
-        ref_run_s = time.perf_counter() - tr
-        output_dt = max(job["dt"], 1e-3)
-        ts = time.perf_counter()
-        try:
-            res = run(scene, motion, engine=job["engine"], duration=job["duration"], phi0=phi0,
-                      dt=job["dt"], output_dt=output_dt)
-        except Exception as e:  # bad settings for this engine: a row, not a crash
-            return {"job": job, "error": f"{type(e).__name__}: {e}"}
-        run_s = time.perf_counter() - ts
-        row = metrics(res, ref)
-        row.update(dt=job["dt"], output_dt=output_dt, run_s=run_s,
-                   sim_time=float(res.cost.sim_time),
-                   run_real_time_factor=float(res.cost.sim_time) / run_s if run_s > 0
-                   else math.inf,
-                   ref_real_time_factor=float(ref.cost.real_time_factor),
-                   ref_run_real_time_factor=float(ref.cost.sim_time) / ref_run_s
-                   if ref_run_s > 0 else math.inf,
-                   ref_cpu_per_sim_s=float(ref.cost.cpu_s) / float(ref.cost.sim_time)
-                   if float(ref.cost.sim_time) > 0 else math.nan)
-        return {"job": job, "row": row, "n_eta": len(eta_rows(res, ref)),
-                "elapsed_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
     c = compare(scene, motion, engines=job["engines"], phi0=phi0, duration=job["duration"])
     traces = {k: Trace.from_result(r, max_points=job.get("max_points", 2500)).to_dict()
               for k, r in c.results.items()}
     band, judged = _pulse_band(scene, motion, job, phi0, c.results)
     return {"job": job, "table": c.table, "eta": c.eta, "traces": traces,
             "band": band, "band_judged": judged,
+            "model_cpu_per_sim_s": _model_cost(scene, motion, phi0, job["duration"]),
             "alpha": float(scene.alpha), "motion": c.motion, "phi0": phi0,
             "settings": {k: dict(v) for k, v in c.settings.items()},
             "elapsed_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
+
+
+def _model_cost(scene, motion, phi0: float, duration: float) -> float:
+    """The analytic model's cost on a case [CPU s per simulated s]: one run of its compiled
+    path (``method="compiled"``, equal to the reference's solve_ivp path on every
+    well-conditioned quantity, docs/reproducibility.md; the kernels' one-off loading apart,
+    ``Result.cost.compile_cpu_s``), the cheapest way to run the model; NaN if it fails."""
+    from ..runner import run
+
+    try:
+        r = run(scene, motion, engine=REFERENCE, duration=duration, phi0=phi0,
+                method="compiled")
+    except Exception:  # noqa: BLE001 - a cost not measured is NaN, the case stands
+        return math.nan
+    sim = float(r.cost.sim_time)
+    return float(r.cost.cpu_s) / sim if sim > 0 else math.nan
 
 
 def _pulse_band(scene, motion, job, phi0, results) -> tuple[dict | None, dict]:
@@ -144,25 +136,11 @@ def _run_job_safe(job: dict[str, Any]) -> dict[str, Any]:
         return {"job": job, "error": f"{type(e).__name__}: {e}"}
 
 
-def _relative_cost(engine: str) -> float:
-    """The backend's ``relative_cost`` capability (1.0 for a backend that does not import)."""
-    from ..engines import get_backend
-    from ..errors import BackendUnavailable
-
-    try:
-        return float(get_backend(engine).relative_cost)
-    except BackendUnavailable:
-        return 1.0
-
-
 def _job_weight(job: Mapping[str, Any]) -> float:
     """Relative cost of a job: the longest run first keeps the pool balanced."""
-    w = 1.0
+    w = float(job.get("duration") or 1.0)
     if "hybrid" in job["scene"]:
         w *= 2.5
-    if job["kind"] == "dt":
-        w *= 1e-3 / job["dt"]
-        w *= _relative_cost(job["engine"])
     return w
 
 

@@ -42,9 +42,9 @@ def test_sweeps_and_campaigns_read_the_capabilities():
     assert _batch_key(dict(base, engine="mujoco")) is not None
     assert _batch_key(dict(base, engine="pymunk")) is None
     assert _batch_key(dict(base, engine="mujoco", phi0=0.1)) is None
-    job = {"scene": "paper-asymmetric", "kind": "dt", "dt": 1e-3}
-    assert _job_weight(dict(job, engine="pybullet")) == pytest.approx(2.5)
-    assert _job_weight(dict(job, engine="mujoco")) == pytest.approx(1.0)
+    job = {"scene": "paper-asymmetric", "kind": "pulse", "duration": 4.0}   # longest first
+    assert _job_weight(job) == pytest.approx(4.0)
+    assert _job_weight(dict(job, scene="paper-asymmetric-hybrid")) == pytest.approx(10.0)
     assert [e for e in REGISTRY if is_fast(e)] == ["pymunk", "mujoco"]
 
 
