@@ -472,10 +472,10 @@ def test_default_records_are_the_bundled_ones():
     assert names == ["IV1940_ElCentro_180.AT2", "IV1979_ElCentroArray4_230.AT2"]
 
 
-def test_the_models_cost_is_its_compiled_path_measured_beside_the_engines(quick):
+def test_the_models_cost_is_its_compiled_path_measured_beside_the_engines(quick, monkeypatch):
     """Every comparison payload carries one compiled-path run's cost of the analytic model
-    (the decision's first row is their median); payloads stored without it fall back to the
-    reference runs' cost in the metrics."""
+    (the decision's first row is their median); a payload stored in an older form is run
+    again, not read with the cost missing."""
     import math
     from types import SimpleNamespace
 
@@ -486,11 +486,20 @@ def test_the_models_cost_is_its_compiled_path_measured_beside_the_engines(quick)
                                   {"model_cpu_per_sim_s": float("nan")}, {}],
                         metrics=pd.DataFrame({"backend": ["analytic"], "cpu_per_sim_s": [0.5]}))
     assert _model_cost(t) == pytest.approx(0.002)
-    assert _model_cost(SimpleNamespace(payloads=[{}], metrics=t.metrics)) == 0.5
-    assert _model_cost(SimpleNamespace(payloads=[], metrics=pd.DataFrame())) is None
+    assert _model_cost(SimpleNamespace(payloads=[{}], metrics=t.metrics)) is None
     import pickle
 
     store = path.parent / "store"
     pkl = [p for p in store.rglob("comparisons/*.pkl")]
     costs = [pickle.loads(p.read_bytes()).get("model_cpu_per_sim_s") for p in pkl]
     assert pkl and all(c is not None and math.isfinite(c) and c > 0 for c in costs)
+    from rockbench.campaign import run as R
+
+    old = pickle.loads(pkl[0].read_bytes())
+    old.pop("format")
+    R.S.write_payload(pkl[0].parent, pkl[0].stem, old)
+    ran, real = [], R._run_job_safe
+    monkeypatch.setattr(R, "_run_job_safe", lambda j: ran.append(j) or real(j))
+    got = R._comparisons([dict(old["job"])], cache=pkl[0].parent, desc="x", executor="serial",
+                         progress=False)
+    assert ran and got[0]["format"] == R.PAYLOAD_FORMAT    # the old form was run again

@@ -50,24 +50,13 @@ def _hybrid(scenes, labels: dict[str, str]) -> dict[str, bool]:
 def _model_cost(t: Any) -> float | None:
     """The analytic model's cost [CPU s per simulated s]: the median over the comparisons'
     cases of its compiled path's run (``model_cpu_per_sim_s`` of each payload, measured beside
-    the engines: the cheapest way to run the model), else (payloads stored before it was
-    measured) the median ``cpu_per_sim_s`` of its reference runs in the metrics; None when
-    neither was measured."""
+    the engines: the cheapest way to run the model); None when none was measured."""
     import math
+    import statistics
 
-    import pandas as pd
-
-    costs = [float(p["model_cpu_per_sim_s"]) for p in (t.payloads or [])
-             if p.get("model_cpu_per_sim_s") is not None
-             and math.isfinite(float(p["model_cpu_per_sim_s"]))]
-    if costs:
-        return float(pd.Series(costs).median())
-    m = t.metrics
-    if m is None or not len(m) or "cpu_per_sim_s" not in m:
-        return None
-    cost = pd.to_numeric(m.loc[m["backend"] == "analytic", "cpu_per_sim_s"],
-                         errors="coerce").dropna()
-    return float(cost.median()) if len(cost) else None
+    costs = [float(c) for p in (t.payloads or [])
+             if (c := p.get("model_cpu_per_sim_s")) is not None and math.isfinite(float(c))]
+    return float(statistics.median(costs)) if costs else None
 
 
 def model_row(t: Any, scene_word: str) -> dict[str, Any] | None:

@@ -163,14 +163,7 @@ def _validity_section(spec: Mapping[str, Any] | None, names: Sequence[str], stor
     from .maps import is_fast
 
     scene = load_scene(spec["scene"])
-    given = scene.friction is not None
-    if not given:       # the rule's default, given to every engine alike for this map
-        import dataclasses
-
-        from ..scene.contact import Contact
-        from ..validity import DEFAULT_FRICTION
-
-        scene = dataclasses.replace(scene, contact=Contact(friction=DEFAULT_FRICTION))
+    given = scene.friction is not None      # else validity_map gives the rule's default
     engines = [e for e in names if e != REFERENCE]
     fast = engines if every_engine else [e for e in engines if is_fast(e)] or engines
     left_out, engines = [e for e in engines if e not in fast], fast

@@ -68,6 +68,11 @@ def _job_label(job: Mapping[str, Any]) -> str:
     return f"{scene_label(job['scene'])} {motion_label(job.get('motion'))}"
 
 
+#: The form of a comparison payload (:func:`_run_job`): a stored payload of another form was
+#: written by code that measured less (it is run again, not read with a field missing).
+PAYLOAD_FORMAT = 2
+
+
 def _run_job(job: dict[str, Any]) -> dict[str, Any]:
     """One comparison job (in a worker): returns a small, picklable payload."""
     from ..comparison import compare
@@ -85,7 +90,7 @@ def _run_job(job: dict[str, Any]) -> dict[str, Any]:
               for k, r in c.results.items()}
     band, judged = _pulse_band(scene, motion, job, phi0, c.results)
     return {"job": job, "table": c.table, "eta": c.eta, "traces": traces,
-            "band": band, "band_judged": judged,
+            "band": band, "band_judged": judged, "format": PAYLOAD_FORMAT,
             "model_cpu_per_sim_s": _model_cost(scene, motion, phi0, job["duration"]),
             "alpha": float(scene.alpha), "motion": c.motion, "phi0": phi0,
             "settings": {k: dict(v) for k, v in c.settings.items()},
@@ -146,14 +151,15 @@ def _job_weight(job: Mapping[str, Any]) -> float:
 
 def _comparisons(jobs: Sequence[dict[str, Any]], *, cache: Path, desc: str,
                  **run: Any) -> list[dict[str, Any]]:
-    """The payloads of ``jobs`` in input order, each with its ``label``: stored ones loaded,
-    the others run (longest first) and stored as each finishes (error payloads are not kept)."""
+    """The payloads of ``jobs`` in input order, each with its ``label``: stored ones of this
+    :data:`PAYLOAD_FORMAT` loaded, the others run (longest first) and stored as each finishes
+    (error payloads are not kept)."""
     out: dict[str, dict[str, Any]] = {}
     todo: dict[str, dict[str, Any]] = {}
     for job in jobs:
         k = S.key(job)
         hit = S.load_payload(cache, k)
-        if hit is not None and "error" not in hit:
+        if hit is not None and "error" not in hit and hit.get("format") == PAYLOAD_FORMAT:
             out[k] = hit
         else:
             todo[k] = job

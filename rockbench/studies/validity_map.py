@@ -8,7 +8,9 @@ and W = omega_g / p (alpha and p of the taller column). The analytic model runs 
 scene's friction, :func:`rockbench.validity.friction_of`). Inside the model no engine runs:
 the analytic model is the reference there, and the cheapest. Outside it every selected engine
 runs at its default settings (or ``settings``), and :func:`classify_cell` decides the region
-from their summaries.
+from their summaries. A scene without its own friction is mapped with
+:data:`rockbench.validity.DEFAULT_FRICTION` given to every engine alike (their own defaults
+differ, each at least that): the rule and the engines then see the same contact.
 
 Columns of the frame (:data:`VALIDITY_COLUMNS`; ``docs/maps.md``):
 
@@ -18,7 +20,8 @@ Columns of the frame (:data:`VALIDITY_COLUMNS`; ``docs/maps.md``):
   more friction than it has, the ground never falls faster than gravity);
   ``"agree"`` outside the model, and every engine ran (status ``ok``) and they agree
   (:func:`classify_cell`: the same verdict overturned or not, and both spreads at most
-  ``tolerance``, which a cell where every engine overturns does not need); ``"disagree"`` outside, every engine ran, and they do not agree;
+  ``tolerance``, which a cell where every engine overturns does not need); ``"disagree"``
+  outside, every engine ran, and they do not agree;
   ``"diverged"`` outside, and at least one engine's run diverged, was invalid or failed (or
   no engine could run);
 * ``reason``: the analytic run's validity sentence (``inside``, or "outside the model from
@@ -52,7 +55,8 @@ import pandas as pd
 from ..errors import ParameterError
 
 __all__ = ["validity_map", "engines_to_run", "classify_cell", "relative_spread", "default_axes", "REGIONS",
-           "VALIDITY_COLUMNS", "default_engines", "PHI_FLOOR", "SLIDING_FLOOR"]
+           "VALIDITY_COLUMNS", "default_engines", "PHI_FLOOR", "SLIDING_FLOOR",
+           "with_rule_friction"]
 
 #: The regions of a validity map, in the order of the figure's legend.
 REGIONS = ("model", "agree", "disagree", "diverged")
@@ -202,6 +206,20 @@ def _cell_item(item: Mapping[str, Any]) -> dict[str, Any]:
 # ------------------------------------------------------------------------------------------
 # The map
 # ------------------------------------------------------------------------------------------
+def with_rule_friction(scene: Any) -> Any:
+    """``scene`` (a Scene) as its validity map runs it: unchanged with its own friction, else
+    with the validity rule's :data:`rockbench.validity.DEFAULT_FRICTION` given to every engine
+    alike (their own defaults differ; the rule assumes this one)."""
+    import dataclasses
+
+    from ..scene.contact import Contact
+    from ..validity import DEFAULT_FRICTION
+
+    if scene.friction is not None:
+        return scene
+    return dataclasses.replace(scene, contact=Contact(friction=DEFAULT_FRICTION))
+
+
 def default_axes(scene: Any, n: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """A report's grid: ``n`` values of A from 0.5 to max(8, 1.5 A_mu) (A_mu = mu / tan alpha,
     where the PGA reaches mu g; at most 100) and ``n`` of W from 1 to 10."""
@@ -294,6 +312,7 @@ def validity_map(scene: Any, *, shape: str = "symmetric", sign: int = 1, A: Any 
         raise ParameterError("tail", tail, "a finite number of seconds >= 0")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise ParameterError("workers", workers, "an integer >= 1")
+    scene = with_rule_friction(scene)
     da, dw = default_axes(scene)
     As = _axis(da if A is None else A, "A")
     Ws = _axis(dw if W is None else W, "W")
