@@ -253,6 +253,12 @@ def test_the_command_prints_the_counts_and_writes_its_files(tmp_path, capsys):
     df = pd.read_csv(out / "validity_map.csv")
     assert list(df.columns) == list(VALIDITY_COLUMNS) and len(df) == 4
     assert (out / "validity_map.png").stat().st_size > 0
+    assert "with the scene's friction mu = 0.3" in text
+    rc = main(["validity-map", "housner-block", "--grid", "1", "--tail", "0.5", "--engine",
+               ENGINES[0], "--workers", "1", "-q"])          # no friction of its own
+    text = capsys.readouterr().out
+    assert rc == 0 and "with mu = 1, the validity rule's default" in text
+    assert "the scene's friction" not in text
 
 
 # ------------------------------------------------------------------------------------------

@@ -113,7 +113,7 @@ def cmd_validity_map(args: argparse.Namespace) -> int:
         return 0
 
     for s in validity_sentences(frame, friction=friction_of(scene), tolerance=args.tolerance,
-                                engines=ran):
+                                engines=ran, friction_given=scene.friction is not None):
         print(s)
     counts = frame["region"].value_counts()
     print("cells per region: " + ", ".join(f"{r} {int(counts.get(r, 0))}"
