@@ -30,7 +30,8 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
-SCENES = (HERE / "scenes" / "stone-portal.toml", HERE / "scenes" / "heavy-deck.toml")
+SCENES = tuple(HERE / "scenes" / f"{n}.toml" for n in ("stone-portal", "heavy-deck",
+                                                     "precast-portal"))
 
 
 def _children_cpu() -> float:

@@ -317,7 +317,7 @@ def test_cli_advise_on_a_user_scene_file_decides_every_tolerance(tmp_path, capsy
     assert steps == sorted(steps, reverse=True) and steps[-1] < steps[0]
     assert main(argv) == 0
     again = json.loads(capsys.readouterr().out)
-    assert again["search_cpu_s"] == 0.0                         # every run from the store
+    assert again["runs_cpu_s"] == 0.0                           # every run from the store
     assert [a["recommended"]["setting"] for a in again["answers"]] == \
         [a["recommended"]["setting"] for a in j["answers"]]
 
@@ -327,3 +327,31 @@ def test_cli_advise_rejects_a_bad_tolerance(capsys):
 
     assert main(["advise", "housner-block", "--tolerance", "2"]) == 2
     assert "tolerance" in capsys.readouterr().err
+
+
+def test_a_tie_recommends_the_more_accurate_of_equals():
+    """Two settings as cheap within the machine's noise: the recommendation is the more
+    accurate one, whichever measured a little cheaper; one beyond the tie margin stays behind."""
+    a = {"engine": "pymunk", "cpu_per_sim_s": 0.0060, "worst_error_choice": 0.04,
+         "worst_error_heldout": 0.03, "value": 4e-3}
+    b = {"engine": "mujoco", "cpu_per_sim_s": 0.0064, "worst_error_choice": 0.01,
+         "worst_error_heldout": math.nan, "value": 4e-3}
+    c = {"engine": "drake", "cpu_per_sim_s": 0.02, "worst_error_choice": 0.001,
+         "worst_error_heldout": 0.001, "value": 1e-2}
+    assert [g["engine"] for g in S._tie_order([a, b, c])] == ["mujoco", "pymunk", "drake"]
+    b2 = dict(b, cpu_per_sim_s=0.0059)
+    assert [g["engine"] for g in S._tie_order([b2, a, c])] == ["mujoco", "pymunk", "drake"]
+
+
+def test_a_rung_that_may_be_confirmed_is_budgeted_with_its_held_out_part(fake, monkeypatch):
+    """The budget counts the held-out runs a rung may bring: with room for the next choice
+    part alone but not for its confirmation, the search stops before it."""
+    monkeypatch.setattr("rockbench.machine.tree_cpu_s", lambda: 0.0)   # the fake runs' CPU
+    set_curves, calls = fake
+    set_curves({"pymunk": _curve({4e-3: 0.01, 2e-3: 0.01}, {4e-3: 0.01})}, {"pymunk": 0.5})
+    # the coarsest rung (2 choice cases x 1 s x 0.125 CPU s/s) is within 2 %: the next rung
+    # (0.25 CPU s/s) may confirm it, choice and held-out: 2 x 0.25 + 2 x 0.25 = 1 CPU s
+    d = S.search("housner-block", [0.02], ["pymunk"], dts=[4e-3, 2e-3],
+                 executor="serial", budget_cpu_s=0.25 + 0.75)
+    assert d.stopped.startswith("CPU budget")
+    assert ("pymunk", 2e-3, "choice") not in calls

@@ -11,7 +11,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ..constants import DT_LADDER
+from ..constants import BUDGETS, DT_LADDER
 from ..errors import ParameterError
 
 from .common import add_vertical_option, engine_names, load_scene_from, vertical_ratio
@@ -70,8 +70,9 @@ def add_choosing_commands(sub) -> None:
                    help="the full evidence and the search of the contact parameters (slow)")
     add_vertical_option(p, "every pulse and record of the evidence")
     p.add_argument("--budget", type=arg_positive, metavar="CPU_S",
-                   help="the most CPU seconds the search may spend (default: 120 quick, 600 "
-                        "default, none --full); beyond it the answer says what to run next")
+                   help="the most CPU seconds the search may spend (default: "
+                        f"{BUDGETS['quick']:g} quick, {BUDGETS['default']:g} default, none "
+                        "--full); beyond it the answer says what to run next")
     p.add_argument("--store", metavar="PATH",
                    help="result store folder, reused on a rerun (default advice/SCENE)")
     p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")

@@ -129,7 +129,8 @@ class Advice:
             "scene": d.scene, "size": d.size, "tolerances": list(self.tolerances),
             "vertical_ratio": d.vertical,
             "answers": answers, "fates": FATES, "coverage": d.coverage,
-            "engines": d.engines, "search_cpu_s": d.cpu_s, "stopped": d.stopped,
+            "engines": d.engines, "search_cpu_s": d.cpu_s, "runs_cpu_s": d.runs_cpu_s,
+            "stopped": d.stopped,
             "error_definition": "worst over a part of the evidence of each case's measure: "
                                 "|peak error| (a surviving pulse away from the boundary), eta "
                                 "error (free rocking without devices), the RMS history error "

@@ -34,11 +34,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
+from ..constants import BUDGETS
 from ..errors import ParameterError
 from ..fates import ORDER
 from .decide import TIE, _check_tolerance, convergence
@@ -47,10 +49,6 @@ __all__ = ["TOLERANCE_LADDER", "BUDGETS", "Decision", "search", "coverage"]
 
 #: The tolerances the report decides, loosest first (relative errors: 0.02 = 2 %).
 TOLERANCE_LADDER: tuple[float, ...] = (0.10, 0.05, 0.02, 0.005)
-
-#: The search's default CPU budget [s] per evidence size (None: no limit). Beyond it the
-#: answer says what to run next and what it would cost.
-BUDGETS: dict[str, float | None] = {"quick": 120.0, "default": 600.0, "full": None}
 
 #: Simulated seconds are spent at this many CPU seconds per simulated second on an engine's
 #: first rung when nothing is measured yet (its relative_cost scales it): only the budget's
@@ -75,15 +73,17 @@ class Decision:
     outcomes : one row per (tolerance, engine): ``tolerance``, ``engine``, ``status`` (a key
         of :data:`FATES`), ``setting`` (label), ``knob``, ``value``, ``worst_error_choice``,
         ``worst_error_heldout`` [-], ``cpu_per_sim_s`` [s/s], ``reason`` (words),
-        ``recommended`` (the cheapest that meets it; ties within :data:`TIE` noted in
-        ``tie_with_cheapest``);
+        ``recommended`` (the cheapest that meets it; among those within :data:`TIE` of the
+        cheapest, all noted in ``tie_with_cheapest``, the most accurate);
     evidence : one row per setting run (:data:`rockbench.studies.tradeoff.TABLE_COLUMNS`);
     runs : one row per run; cases : the evidence with its labels;
     coverage : what the held-out part holds (``counted``, ``overturning``, ``near_boundary``,
         ``records``, ``outside``: left out), and ``thin`` (a sentence, "" when it is not thin);
     next_steps : tolerance -> what to run next when nothing meets it (engine, setting,
         ``cpu_s`` estimate, command line), or None;
-    engines : every registered engine's state; cpu_s : the CPU the search spent [s];
+    engines : every registered engine's state; cpu_s : the CPU the search spent [s] (process
+    CPU of the search and its workers); runs_cpu_s : the CPU of the runs it measured [s] (0
+    when every run came from the store);
     stopped : why the search stopped early ("" when it did not); machine;
     vertical : r [-] of the evidence's vertical motion (a_v = r x horizontal; 0: none).
     """
@@ -104,6 +104,7 @@ class Decision:
     machine: dict[str, Any] = field(default_factory=dict)
     contact: pd.DataFrame = field(default_factory=pd.DataFrame)
     vertical: float = 0.0
+    runs_cpu_s: float = 0.0
 
     def at(self, tolerance: float) -> pd.DataFrame:
         """The outcomes at one tolerance, recommended first, then in rank order."""
@@ -228,6 +229,7 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
     budget = BUDGETS[size] if budget_cpu_s == "auto" else budget_cpu_s
     if budget is not None and not (isinstance(budget, (int, float)) and budget > 0):
         raise ParameterError("budget_cpu_s", budget_cpu_s, "> 0 CPU seconds, 'auto' or None")
+    scene_arg = str(scene) if isinstance(scene, (str, Path)) else None
     scene = load_scene(scene)
     selected = None if engines is None else [n for n in resolve_engines(engines)
                                              if n != REFERENCE]
@@ -244,8 +246,10 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
 
     from ..progress import bar as progress_bar
 
+    from ..machine import tree_cpu_s
+
     track = progress_bar(None, "search", "CPU s", show=progress)
-    ledger: dict[str, float] = {"spent": 0.0}
+    ledger: dict[str, float] = {"spent": 0.0, "runs": 0.0, "tree0": tree_cpu_s()}
     frames: list[pd.DataFrame] = []
 
     def measure(eng: str, over: dict[str, Any], cases, label: str) -> pd.DataFrame:
@@ -254,13 +258,17 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
 
         def on_row(row: dict[str, Any]) -> None:
             c = sum(row.get("cpu_s") or [])
-            ledger["spent"] += c
+            ledger["runs"] += c
             track.update(round(c, 3))
 
         r = tradeoff(scene, [eng], exact=[over], cases=cases, repeat=1,
                      self_consistency="none", executor=executor, workers=workers,
                      store=store, progress=False, on_row=on_row).runs
         frames.append(r)
+        _account(ledger)
+        shown = getattr(track, "n", None)
+        if isinstance(shown, (int, float)) and ledger["spent"] > shown:
+            track.update(round(ledger["spent"] - shown, 3))   # the builds and pools too
         return r
 
     best: dict[float, tuple[float, str]] = {}          # tolerance -> (cost, engine) confirmed
@@ -280,21 +288,22 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
                 variants += _contact_search(n, knob, values, choice, measure, contact_rows)
             ladders += [_Ladder(n, knob, values, v, float(get_backend(n).relative_cost), ctx)
                         for v in variants]
-        stopped = _race(ladders, ledger, budget, sim_choice, track)
+        stopped = _race(ladders, ledger, budget, sim_choice, sim_held, track)
     for lad in ladders:
         lad.finish(outcome, stopped)
     track.close()
     runs = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     evidence = summarize(runs) if len(runs) else pd.DataFrame()
     rows = _outcome_rows(tols, names, states, outcome)
-    nexts = {t: _next_step(t, rows, outcome, knobs, scene, sim_choice + sim_held, size,
-                           float(vertical))
+    overhead = max(ledger["spent"] / ledger["runs"], 1.0) if ledger["runs"] > 0 else 1.0
+    nexts = {t: _next_step(t, rows, knobs, scene_arg or scene.name, sim_choice + sim_held,
+                           size, float(vertical), overhead)
              for t in tols}
     return Decision(scene=scene.name, size=size, tolerances=tols, outcomes=rows,
                     evidence=evidence, runs=runs, cases=vset, coverage=coverage(vset),
                     next_steps=nexts, engines=states, cpu_s=ledger["spent"], stopped=stopped,
                     knobs=knobs, machine=machine_info(), contact=pd.DataFrame(contact_rows),
-                    vertical=float(vertical))
+                    vertical=float(vertical), runs_cpu_s=ledger["runs"])
 
 
 def _label(engine: str, knob: str, value: float, variant: Mapping[str, Any]) -> str:
@@ -305,11 +314,39 @@ def _label(engine: str, knob: str, value: float, variant: Mapping[str, Any]) -> 
     return Setting(engine, tuple(sorted({knob: value, **variant}.items()))).label
 
 
+def _account(ledger: dict[str, float]) -> None:
+    """What the search has spent so far [CPU s]: the process CPU of this process and its
+    workers since it started (the runs, the model builds, the warm-ups, the pools and the
+    store: what the user waits for), or the runs' own CPU when that is more (workers this
+    machine does not see, e.g. a Dask cluster's)."""
+    from ..machine import tree_cpu_s
+
+    ledger["spent"] = max(tree_cpu_s() - ledger["tree0"], ledger["runs"])
+
+
+def _rung_cpu_s(lad: "_Ladder", ledger: dict[str, float], sim_choice: float,
+                sim_held: float) -> float:
+    """The estimated CPU [s] of a ladder's next rung as the budget counts it: its choice part,
+    plus its held-out part when that rung may be confirmed (a tolerance still open whose
+    last rung is within it), each at the rung's estimated cost per simulated second, scaled by
+    what the search has spent so far over its runs' own CPU (the model builds, warm-ups and
+    pools around them)."""
+    per = lad.estimate()
+    if not math.isfinite(per):
+        return 0.0
+    sim = sim_choice
+    if lad.rungs and any(lad.rungs[-1].choice_error <= t for t in lad.open()):
+        sim += sim_held
+    overhead = ledger["spent"] / ledger["runs"] if ledger["runs"] > 0 else 1.0
+    return per * sim * max(overhead, 1.0)
+
+
 def _race(ladders: list["_Ladder"], ledger: dict[str, float], budget: float | None,
-          sim_choice: float, track) -> str:
+          sim_choice: float, sim_held: float, track) -> str:
     """Run the ladders' rungs: every coarsest rung first (in the ladders' order), then always
     the cheapest next rung of a ladder still in the race; returns why the search stopped early
-    ("" when it did not)."""
+    ("" when it did not). A rung whose estimated CPU (:func:`_rung_cpu_s`) would take the
+    search past its budget is not started."""
     first = True
     while True:
         alive = [lad for lad in ladders if lad.alive()]
@@ -326,15 +363,15 @@ def _race(ladders: list["_Ladder"], ledger: dict[str, float], budget: float | No
             lad = min(alive, key=lambda x: x.estimate())
         if lad.rungs and lad.cannot_win():
             continue                       # cannot_win marks it dearer: out of the race
-        est = lad.estimate() * sim_choice
-        if budget is not None and ledger["spent"] + (est if math.isfinite(est) else 0) > budget:
+        _account(ledger)
+        est = _rung_cpu_s(lad, ledger, sim_choice, sim_held)
+        if budget is not None and ledger["spent"] + est > budget:
             why = f"the search's CPU budget ({budget:g} s) ended"
             for x in alive:
                 x.stop = why
             return f"CPU budget of {budget:g} s reached"
         if track is not None:
-            left = sum(x.estimate() * sim_choice * 2 for x in alive if math.isfinite(
-                x.estimate()))
+            left = sum(_rung_cpu_s(x, ledger, sim_choice, sim_held) for x in alive)
             track.total = round(min(ledger["spent"] + left, budget or math.inf), 1)
         lad.step()
 
@@ -537,8 +574,8 @@ def _outcome_rows(tols, names, states, outcome) -> pd.DataFrame:
             if r["state"] != "ran":
                 group.append({"tolerance": t, "engine": r["name"], "status": r["state"],
                               "reason": r["detail"]})
-        meets = sorted([g for g in group if g["status"] == "meets"],
-                       key=lambda g: (g["cpu_per_sim_s"], -g.get("value", 0)))
+        meets = _tie_order(sorted([g for g in group if g["status"] == "meets"],
+                                  key=lambda g: (g["cpu_per_sim_s"], -g.get("value", 0))))
         rest = sorted([g for g in group if g["status"] != "meets"],
                       key=lambda g: (order.get(g["status"], 9),
                                      g.get("worst_error_choice", math.inf)
@@ -547,8 +584,8 @@ def _outcome_rows(tols, names, states, outcome) -> pd.DataFrame:
         for k, g in enumerate(meets + rest, 1):
             g["rank"] = k
             g["recommended"] = k == 1 and g["status"] == "meets"
-            g["tie_with_cheapest"] = bool(g["status"] == "meets" and meets and
-                                          g["cpu_per_sim_s"] <= TIE * meets[0]["cpu_per_sim_s"])
+            g["tie_with_cheapest"] = bool(g["status"] == "meets" and meets and g[
+                "cpu_per_sim_s"] <= TIE * min(m["cpu_per_sim_s"] for m in meets))
             rows.append(g)
     cols = ["tolerance", "rank", "engine", "status", "recommended", "setting", "value",
             "worst_error_choice", "worst_error_heldout", "cpu_per_sim_s", "erratic",
@@ -560,29 +597,61 @@ def _outcome_rows(tols, names, states, outcome) -> pd.DataFrame:
     return df[cols]
 
 
-def _next_step(t, rows, outcome, knobs, scene, sim_total, size,
-               vertical: float = 0.0) -> dict[str, Any] | None:
-    """When nothing meets ``t``: the engine that came closest, its next finer setting, and an
-    estimate of what running it (choice and held-out) costs [CPU s]."""
+def _worst_both(g: dict[str, Any]) -> float:
+    """The worst of an outcome's choice and held-out errors (NaN parts ignored)."""
+    e = [float(g.get(k, math.nan)) for k in ("worst_error_choice", "worst_error_heldout")]
+    e = [x for x in e if math.isfinite(x)]
+    return max(e) if e else math.inf
+
+
+def _tie_order(meets: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Outcomes that meet a tolerance, cheapest first, except that those as cheap as the
+    cheapest within the machine's noise (:data:`TIE`) come first most accurate first (their
+    worst error, choice or held out): the recommendation among a tie does not flip with the
+    load of the machine, and it is the more accurate of equals."""
+    if not meets:
+        return meets
+    floor = meets[0]["cpu_per_sim_s"]
+    tie = [g for g in meets if g["cpu_per_sim_s"] <= TIE * floor]
+    rest = [g for g in meets if g["cpu_per_sim_s"] > TIE * floor]
+    return sorted(tie, key=lambda g: (_worst_both(g), g["cpu_per_sim_s"])) + rest
+
+
+def _next_step(t, rows, knobs, scene_arg: str, sim_total: float, size: str,
+               vertical: float = 0.0, overhead: float = 1.0) -> dict[str, Any] | None:
+    """When nothing meets ``t``: what to run next - the next finer setting of the engine
+    whose next step is the cheapest among those that came within ``t`` on the choice part
+    (else of the one that came closest) - and an estimate of what running it (choice and
+    held-out) costs [CPU s]: its rung's cost scaled by the step ratio, times the search's
+    measured overhead around its runs (builds, warm-ups, pools)."""
     g = rows[np.isclose(rows["tolerance"].astype(float), t)]
     if (g["status"] == "meets").any():
         return None
     cand = g[g["status"].isin(["fails held-out", "not converged", "not reached", "dearer"])]
     cand = cand[np.isfinite(cand["worst_error_choice"].astype(float))]
-    if not len(cand):
+    steps = []
+    for _, r in cand.iterrows():
+        knob = knobs.get(r["engine"], "dt")
+        v = _finer(knob, float(r["value"]))
+        if v is None:
+            continue
+        per = float(r["cpu_per_sim_s"]) * ((float(r["value"]) / v) if knob == "dt" else 1.0)
+        steps.append((float(r["worst_error_choice"]) > t,
+                      per if math.isfinite(per) else math.inf,
+                      float(r["worst_error_choice"]), r["engine"], knob, v, per))
+    if not steps:
         return None
-    r = cand.sort_values("worst_error_choice").iloc[0]
-    knob = knobs.get(r["engine"], "dt")
-    v = _finer(knob, float(r["value"]))
-    if v is None:
-        return None
-    cost = float(r["cpu_per_sim_s"]) * ((float(r["value"]) / v) if knob == "dt" else 1.0)
-    cmd = (f"rockbench advise {scene.name} --tolerance {t:g} --engine {r['engine']} "
-           f"--setting {r['engine']}.{knob}={v:g}"
+    if any(not s[0] for s in steps):       # some came within t: the cheapest next step
+        _, _, _, eng, knob, v, per = min(s for s in steps if not s[0])
+    else:                                  # none did: the closest one's
+        _, _, _, eng, knob, v, per = min(steps, key=lambda s: s[2])
+    cmd = (f"rockbench advise {scene_arg} --tolerance {t:g} --engine {eng} "
+           f"--setting {eng}.{knob}={v:g}"
            + ("" if size == "default" else f" --{size}" if size != "quick" else " --quick")
            + (f" --vertical {vertical:g}" if vertical else ""))
-    return {"engine": r["engine"], "setting": f"{knob}={v:g}", "knob": knob, "value": v,
-            "cpu_s": cost * sim_total if math.isfinite(cost) else math.nan, "command": cmd}
+    return {"engine": eng, "setting": f"{knob}={v:g}", "knob": knob, "value": v,
+            "cpu_s": per * sim_total * overhead if math.isfinite(per) else math.nan,
+            "command": cmd}
 
 
 def _contact_search(n, knob, ladder, choice, measure, rows) -> list[dict[str, Any]]:
