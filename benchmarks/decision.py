@@ -6,7 +6,8 @@ docs/scenes.md (``benchmarks/scenes/``), and what each decided.
     python benchmarks/decision.py [--repeat R] [--scene FILE ...] [--commands both|quick|advise]
                                   [--out DIR]
 
-Writes ``decision.md``: per structure and command, the CPU time (median and range over the
+Writes ``decision.md`` (``decision_quick.md`` or ``decision_advise.md`` with ``--commands``):
+per structure and command, the CPU time (median and range over the
 repeats), the wall time, and the decision (per tolerance: the recommended engine and setting, or
 nothing confirmed). The numba kernels are loaded from the cache before anything is timed: a
 quick report of the first structure with the compiled engines runs first, untimed (a first run
@@ -127,7 +128,8 @@ def main(argv=None) -> int:
             print(lines[-1], flush=True)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "decision.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    name = "decision.md" if args.commands == "both" else f"decision_{args.commands}.md"
+    (out / name).write_text("\n".join(lines) + "\n", encoding="utf-8")
     return 0
 
 

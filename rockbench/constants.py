@@ -30,4 +30,4 @@ DT_LADDER: tuple[float, ...] = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
 #: evidence size (None: no limit): process CPU of the search and its workers, builds, warm-ups
 #: and pools included. Beyond it the answer says what to run next and what it would cost. The quick one leaves a quick report (the search and
 #: the rest of the page) within 2 CPU minutes on 2 cores.
-BUDGETS: dict[str, float | None] = {"quick": 75.0, "default": 600.0, "full": None}
+BUDGETS: dict[str, float | None] = {"quick": 60.0, "default": 600.0, "full": None}

@@ -332,15 +332,17 @@ def test_cli_advise_rejects_a_bad_tolerance(capsys):
 def test_a_tie_recommends_the_more_accurate_of_equals():
     """Two settings as cheap within the machine's noise: the recommendation is the more
     accurate one, whichever measured a little cheaper; one beyond the tie margin stays behind."""
+    from rockbench.studies.search_outcomes import tie_order
+
     a = {"engine": "pymunk", "cpu_per_sim_s": 0.0060, "worst_error_choice": 0.04,
          "worst_error_heldout": 0.03, "value": 4e-3}
     b = {"engine": "mujoco", "cpu_per_sim_s": 0.0064, "worst_error_choice": 0.01,
          "worst_error_heldout": math.nan, "value": 4e-3}
     c = {"engine": "drake", "cpu_per_sim_s": 0.02, "worst_error_choice": 0.001,
          "worst_error_heldout": 0.001, "value": 1e-2}
-    assert [g["engine"] for g in S._tie_order([a, b, c])] == ["mujoco", "pymunk", "drake"]
+    assert [g["engine"] for g in tie_order([a, b, c])] == ["mujoco", "pymunk", "drake"]
     b2 = dict(b, cpu_per_sim_s=0.0059)
-    assert [g["engine"] for g in S._tie_order([b2, a, c])] == ["mujoco", "pymunk", "drake"]
+    assert [g["engine"] for g in tie_order([b2, a, c])] == ["mujoco", "pymunk", "drake"]
 
 
 def test_a_rung_that_may_be_confirmed_is_budgeted_with_its_held_out_part(fake, monkeypatch):

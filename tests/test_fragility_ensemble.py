@@ -75,7 +75,8 @@ def test_real_records_say_so():
 def _planted_run_cases(capacity_of_scene, monkeypatch):
     """Replace the one executor: a case overturns iff |scale| x the record's PGA >= the
     record's capacity (``capacity_of_scene[scene]`` [m/s^2] x a spread fixed per record);
-    every backend alike; survivors peak at 0.8 x PGA / capacity."""
+    every backend alike (the spread by the record's file name, not its folder: the same on any
+    run); survivors peak at 0.8 x PGA / capacity."""
     import rockbench.sweep as SW
     from rockbench.scene.records import load_record
 
@@ -88,7 +89,7 @@ def _planted_run_cases(capacity_of_scene, monkeypatch):
             if m["path"] not in pga:
                 pga[m["path"]] = float(np.max(np.abs(load_record(
                     m["path"], dt=m.get("dt"), units=m.get("units")).samples)))
-            k = int(hashlib.sha256(m["path"].encode()).hexdigest(), 16) % 1000 / 1000.0
+            k = int(hashlib.sha256(Path(m["path"]).name.encode()).hexdigest(), 16) % 1000 / 1000.0
             cap = capacity_of_scene[c["scene"]] * math.exp(0.4 * (2.0 * k - 1.0))
             x = abs(m["scale"]) * pga[m["path"]]
             rows.append({"engine": c["engine"], "motion.path": m["path"],
@@ -163,6 +164,52 @@ def test_the_section_judges_every_engine_it_runs(cache, tmp_path, monkeypatch):
     assert csv.loc["pymunk", "LS1-Theta_0"] == pytest.approx(a["backends"]["pymunk"]["median"])
     assert csv.loc["pymunk", "LS1-Theta_1"] == pytest.approx(
         a["backends"]["pymunk"]["dispersion"])
+
+
+def test_the_slower_engines_come_from_their_measured_runs_or_are_named_left_out(
+        cache, tmp_path, monkeypatch):
+    """An engine without a compiled stepping loop (here mujoco, declared so) is in the default
+    section only through the runs kept in ``measured``: measured there once (``measure``,
+    what ``report --full`` does), then reused by a later section after its check re-run; with
+    no folder it is left out, and the section says so per frame."""
+    import rockbench.sweep as SW
+    from rockbench.campaign import fragility as CF
+    from rockbench.report.fragility_figures import fragility_html
+
+    _planted_run_cases({"paper-asymmetric": 12.0}, monkeypatch)
+    monkeypatch.setattr(CF, "_fast", lambda names: [n for n in names if n == "pymunk"])
+    monkeypatch.setattr("rockbench.sweep.runs.run_case",
+                        lambda case, keep="all": SW.run_cases([case]).iloc[0].to_dict())
+    monkeypatch.setattr("rockbench.studies.fragility.numerical_evidence",
+                        lambda *a, **k: pd.DataFrame())
+    monkeypatch.setitem(CF.REPORT_SIZES["default"], "records", "synthetic")
+    monkeypatch.setitem(CF.REPORT_SIZES["default"], "n_boot", 20)
+    store = tmp_path / "store"
+    (store / "records").mkdir(parents=True)
+    for p in cache.iterdir():
+        (store / "records" / p.name).symlink_to(p)
+    frames = {"free": "paper-asymmetric"}
+    engines = ["analytic", "pymunk", "mujoco"]
+    opts = dict(store=store, numerical={"pymunk": 0.01, "mujoco": 0.02}, executor="serial",
+                progress=False)
+
+    alone = CF.fragility_section(frames, engines, **opts)
+    assert "error" not in alone, alone.get("error")
+    assert set(alone["frames"][0]["analysis"]["backends"]) == {"analytic", "pymunk"}
+    assert alone["provenance"] == ["mujoco on free: left out (no folder of measured runs)"]
+
+    measured = tmp_path / "fragility-engines"
+    first = CF.fragility_section(frames, engines, measured=measured, measure=True, **opts)
+    assert (measured / "paper-asymmetric_mujoco.parquet").is_file()
+    again = CF.fragility_section(frames, engines, measured=measured, **opts)
+    for sec in (first, again):
+        assert "error" not in sec, sec.get("error")
+        v = sec["frames"][0]["analysis"]["backends"]["mujoco"]
+        assert v["records"] >= MIN_RECORDS and v["indistinguishable"] is True, v["verdict"]
+        (line,) = sec["provenance"]
+        assert line.startswith("mujoco on free: measured earlier (32 runs")
+        assert "mujoco" in sec["what"]
+    assert "measured earlier" in fragility_html(again, tmp_path / "figures")
 
 
 def test_the_command_exports_and_prints_the_new_numbers(cache, tmp_path, monkeypatch, capsys):

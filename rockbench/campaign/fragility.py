@@ -129,11 +129,47 @@ def _pick(steps: np.ndarray, p: np.ndarray, k: int | None) -> np.ndarray:
     return np.sort(steps[chosen])
 
 
+def _slow_cases(scene: str, recs, ims, median_pga: float, engine: str,
+                cfg: Mapping[str, Any], opts: dict, ratio: float) -> list[dict[str, Any]]:
+    """One engine's cases on ``scene`` at the cells of the size ``cfg`` (its ladder found as
+    the section finds it: the analytic runs it needs are kept in the store)."""
+    from ..studies.fragility import planned_cases
+
+    _, e_ladder = _ladder(scene, recs, median_pga, cfg, opts)
+    e_recs = recs[:cfg["engine_records"]] if cfg["engine_records"] else recs
+    return planned_cases(scene, e_recs, ims, [engine], e_ladder, tail=cfg["tail"],
+                         vertical=ratio)
+
+
+def _measure_slow(frames: Mapping[str, str], slow: Sequence[str], recs, median_pga: float,
+                  measured: Path, opts: dict, ratio: float, store) -> None:
+    """``rockbench report --full``: the slower engines' runs at the default report's cells,
+    measured into ``measured`` (:mod:`rockbench.campaign.fragility_measured`), with each
+    engine's numerical term."""
+    from ..scene.scene import load_scene
+    from ..studies.fragility import numerical_evidence, numerical_terms
+    from ..studies.intensity import Structure
+    from .fragility_measured import measure_runs
+    from .maps import scene_label
+
+    cfg = REPORT_SIZES["default"]
+    run = {k: opts[k] for k in ("executor", "workers", "progress") if k in opts}
+    if opts.get("scheduler"):
+        run["dask_address"] = opts["scheduler"]
+    for scene in frames.values():
+        ims = record_ims(recs, Structure.of(load_scene(scene)))
+        for eng in slow:
+            cases = _slow_cases(scene, recs, ims, median_pga, eng, cfg, opts, ratio)
+            num = numerical_terms(numerical_evidence(scene, [eng], store=store)).get(eng)
+            measure_runs(measured, scene_label(scene), eng, cases, num, **run)
+
+
 def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
                       records: Any = None, size: str = "default",
                       store: str | os.PathLike | None = None,
                       numerical: Any = "measure", export_dir: str | os.PathLike | None = None,
-                      vertical: float | None = None, **run: Any) -> dict[str, Any]:
+                      vertical: float | None = None, measured: str | os.PathLike | None = None,
+                      measure: bool = False, **run: Any) -> dict[str, Any]:
     """The fragility section of the default campaign: for each frame (``frames``: label ->
     scene) the runs and the analysis of :func:`run_fragility` over ``records`` (default: the
     size's ensemble, ``synthetic``: :data:`REPORT_SIZES`) on a ladder found per frame (module
@@ -143,7 +179,12 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
     its setting). ``export_dir``: where the fitted curves are written for OpenQuake and
     pelicun (:func:`write_exports`; default ``store/export``; none without a store).
     ``vertical``: as :func:`run_fragility` (records without a vertical channel of their own
-    move the ground vertically by this ratio; None: the recorded channels only). ``run``:
+    move the ground vertically by this ratio; None: the recorded channels only).
+    ``measured``: the folder of the slower engines' runs (those without a compiled stepping
+    loop) at the default size's cells (:mod:`rockbench.campaign.fragility_measured`): a size
+    that runs only the fast engines adds each slower one whose kept runs are complete and
+    reproduce, and says why any other is left out; ``measure`` (``rockbench report --full``)
+    measures them into it first. ``run``:
     executor options (``executor``, ``workers``, ``scheduler``, ``progress``). Returns
     ``{"what": sentence, "ensemble": the ensemble's description
     (:func:`rockbench.studies.ensembles.describe_ensemble`), "frames": [{"label", "scene",
@@ -154,11 +195,20 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
 
     if size not in REPORT_SIZES:
         raise ParameterError("size", size, f"one of {', '.join(REPORT_SIZES)}")
+    from ..scene.scene import load_scene
+    from ..studies.intensity import Structure
+    from ..sweep import store as S
+    from .fragility_measured import reuse_runs
+    from .maps import scene_label
+
     cfg = REPORT_SIZES[size]
     records = cfg["records"] if records is None else records
-    engs = [e for e in engines if e != REFERENCE]
-    engs = _fast(engs) if cfg["engines"] == "fast" else engs
+    every = [e for e in engines if e != REFERENCE]
+    engs = _fast(every) if cfg["engines"] == "fast" else every
+    slow = [e for e in every if e not in engs]
+    ratio = float(vertical or 0.0)
     out_frames = []
+    provenance: list[str] = []
     try:
         with ExitStack() as stack:
             if export_dir is None and store is not None:
@@ -168,19 +218,43 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
             recs = resolve_records(records, cache=Path(store) / "records")
             median_pga = float(np.median(record_ims(recs)["pga"]))
             opts = dict(run, store=store, vertical=vertical)
+            if measure and measured is not None:
+                slow_all = [e for e in every if e not in _fast(every)]
+                if slow_all:
+                    _measure_slow(frames, slow_all, recs, median_pga, Path(measured), opts,
+                                  ratio, store)
             for label, scene in frames.items():
                 ladder, e_ladder = _ladder(scene, recs, median_pga, cfg, opts)
-                f = run_fragility(scene, recs, engines=[REFERENCE, *engs], scales=ladder,
-                                  engine_scales=e_ladder, engine_records=cfg["engine_records"],
-                                  n_boot=cfg["n_boot"], tail=cfg["tail"], numerical=numerical,
-                                  **opts)
+                frame_engs, given = list(engs), {}
+                if slow:
+                    ims = record_ims(recs, Structure.of(load_scene(scene)))
+                for eng in slow:
+                    why = "no folder of measured runs"
+                    if measured is not None:
+                        cases = _slow_cases(scene, recs, ims, median_pga, eng, cfg, opts,
+                                            ratio)
+                        num, why = reuse_runs(measured, scene_label(scene), eng, cases,
+                                              S.store_path(store, "", keyed=True))
+                        if why.startswith("measured earlier"):
+                            frame_engs.append(eng)
+                            if num:
+                                given[eng] = num
+                            provenance.append(f"{eng} on {label}: {why}")
+                            continue
+                    provenance.append(f"{eng} on {label}: left out ({why})")
+                f = run_fragility(scene, recs, engines=[REFERENCE, *frame_engs],
+                                  scales=ladder, engine_scales=e_ladder,
+                                  engine_records=cfg["engine_records"], n_boot=cfg["n_boot"],
+                                  tail=cfg["tail"], numerical=numerical,
+                                  numerical_given=given or None, **opts)
                 out_frames.append({"label": label, "scene": scene, "runs": f.runs,
                                    "analysis": f.analysis, "stripes": f.stripes,
-                                   "record_ims": f.records,
+                                   "record_ims": f.records, "engines": frame_engs,
                                    "scales": ladder.tolist(), "engine_scales": e_ladder.tolist(),
                                    "fig9_scale": float(e_ladder[len(e_ladder) // 2])})
     except Exception as e:  # noqa: BLE001 - the page says what failed; the campaign goes on
         return {"error": f"{type(e).__name__}: {e}"}
+    engs = list(dict.fromkeys(e for fr in out_frames for e in fr["engines"])) or engs
     ens = describe_ensemble(recs)
     n_e = min(cfg["engine_records"] or len(recs), len(recs))
     st = out_frames[0]["analysis"]["structure"] if out_frames else {}
@@ -199,6 +273,7 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
             f"analytic verdicts are most mixed"
             + ("" if size == "full" else "; the whole ladder for every engine with "
                "rockbench report --full")
+
             + f". Each run ends {cfg['tail']:g} s after the record's strong motion (95 % of "
               "its Arias intensity). The analytic curve drawn is its fit on the whole ladder; "
               "the tests, the difference of the medians and the intensity-measure table "
@@ -207,7 +282,7 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
                f"{st['p']:.3g} rad/s of the taller column)." if st else "")
             + " docs/fragility.md defines every number.")
     section = {"what": what, "frames": out_frames, "fig9": True, "size": size,
-               "records": recs, "ensemble": ens,
+               "records": recs, "ensemble": ens, "provenance": provenance,
                "scales": out_frames[0]["scales"] if out_frames else [],
                "engine_scales": out_frames[0]["engine_scales"] if out_frames else []}
     try:

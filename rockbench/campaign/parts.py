@@ -122,6 +122,7 @@ def _part_fragility(c: dict[str, Any]) -> dict[str, Any]:
                              size="full" if c["full"] else "default",
                              store=S.store_path(c["store_dir"], "fragility", keyed=False),
                              export_dir=c["out"] / "fragility-export",
+                             measured=c["out"] / "fragility-engines", measure=c["full"],
                              executor=run["executor"], workers=run["workers"],
                              scheduler=run["dask_address"], progress=run["progress"],
                              vertical=_ratio(c["plan"]) or None)

@@ -133,8 +133,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--records", metavar="DIR", help="records folder (default: bundled ones)")
     add_engine_option(p, "every available one")
     p.add_argument("--quick", action="store_true",
-                   help="a small campaign that still decides: the quick evidence, the fast "
-                        "engines' maps only, no stability sweep or fragility")
+                   help="a small campaign that still decides: the quick evidence, the "
+                        "analytic map only, no stability sweep or fragility")
     p.add_argument("--workers", type=arg_count, metavar="N", help="parallel worker processes")
     p.add_argument("--dask", metavar="ADDRESS",
                    help="run the cases on a dask.distributed scheduler at ADDRESS")
@@ -143,7 +143,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--full", action="store_true",
                    help="the long campaign: measure every engine's map at the plan's full grid "
                         "(the paper's: 100x100x4, adaptively; OUT/engine-maps) where it is "
-                        "missing or no longer reproduces, the next larger evidence and the full "
+                        "missing or no longer reproduces, the slower engines' fragility runs "
+                        "at the default report's cells (OUT/fragility-engines), the next "
+                        "larger evidence, every engine's whole fragility ladder and the full "
                         "stability sweep (reuses the store)")
     add_vertical_option(p, "every pulse and record of the campaign (the stability sweep "
                            "stays horizontal)")

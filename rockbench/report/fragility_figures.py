@@ -247,6 +247,12 @@ def fragility_html(section: Mapping[str, Any], figdir=None) -> str:
     if section.get("error"):
         return f"<p>The fragility runs failed: {H.fmt(section['error'])}</p>"
     parts = [f"<p>{section['what']}</p>"]
+    if section.get("provenance"):
+        parts.append("<p>The slower engines (no compiled stepping loop: their runs are measured "
+                     "by <code>rockbench report --full</code> into the report's "
+                     "<code>fragility-engines</code> folder, docs/fragility.md):</p><ul>"
+                     + "".join(f"<li>{H.fmt(t)}</li>" for t in section["provenance"])
+                     + "</ul>")
     for i, frame in enumerate(section["frames"]):
         a, runs, label = frame["analysis"], frame["runs"], frame["label"]
         im = a["intensity"]

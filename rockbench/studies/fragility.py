@@ -151,6 +151,19 @@ def fragility_cases(scene: str, records: Sequence[Mapping[str, Any]], engines: S
     return cases
 
 
+def planned_cases(scene: str, records: Sequence[Mapping[str, Any]], ims: pd.DataFrame,
+                  engines: Sequence[str], scales: Sequence[float], *,
+                  tail: float | None = None, vertical: float = 0.0,
+                  settings: Mapping[str, Mapping] | None = None,
+                  overrides: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
+    """The cases :func:`run_fragility` runs for ``engines`` on ``records`` at ``scales``:
+    :func:`fragility_cases` with each record's run length from ``tail``
+    (:func:`run_lengths` of the records' measures ``ims``, :func:`record_ims`)."""
+    return fragility_cases(scene, records, engines, scales, settings=settings,
+                           overrides=overrides, durations=run_lengths(ims, tail),
+                           vertical=vertical)
+
+
 # =========================================================================================
 # The engines' own error on the scene
 # =========================================================================================
@@ -329,7 +342,9 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
                   progress: bool = True, n_boot: int = N_BOOT, seed: int = 0,
                   keyed_by_code: bool = True, retry_errors: bool = False,
                   tail: float | None = None, numerical: Any = "measure",
-                  vertical: float | None = None) -> Fragility:
+                  vertical: float | None = None,
+                  numerical_given: Mapping[str, Mapping[str, Any]] | None = None
+                  ) -> Fragility:
     """Run and analyse the fragility of ``scene`` (a built-in name or a .toml path) over
     ``records`` (:func:`resolve_records`: folders, files, ``bundled``, ``synthetic``) at the
     ladder ``scales`` (:func:`parse_scales`), both polarities, for the analytic model and
@@ -342,7 +357,9 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     [s] ends each run ``tail`` s after the record's strong motion (:func:`run_lengths`).
     ``numerical``: "measure" (each engine's error on the scene at its setting,
     :func:`numerical_evidence`, kept in the store), None (not measured: beta_num NaN), or a
-    mapping engine -> beta_num [-]. ``store``: a folder; rows are kept under
+    mapping engine -> beta_num [-]; with "measure", ``numerical_given`` (engine ->
+    :func:`numerical_terms`' entry, measured before) spares those engines the measurement.
+    ``store``: a folder; rows are kept under
     ``store/<code fingerprint>/`` (:func:`rockbench.sweep.store.code_fingerprint`: results of
     other code are never mixed in; ``keyed_by_code=False`` keeps them in ``store`` itself, keyed
     by the case only), the synthetic records under ``store/records`` (else in the temporary
@@ -387,14 +404,13 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
     recs = resolve_records(records, cache=Path(store) / "records" if store is not None
                            else None)
     ims = record_ims(recs, structure)
-    durations = run_lengths(ims, tail)
-    cases = fragility_cases(scene, recs, [REFERENCE], ladder, settings=settings,
-                            overrides=overrides, durations=durations, vertical=ratio)
     e_ladder = parse_scales(engine_scales) if engine_scales is not None else ladder
     e_recs = recs[:engine_records] if engine_records else recs
+    cases = planned_cases(scene, recs, ims, [REFERENCE], ladder, tail=tail, vertical=ratio,
+                          settings=settings, overrides=overrides)
     if len(names) > 1:
-        cases += fragility_cases(scene, e_recs, names[1:], e_ladder, settings=settings,
-                                 overrides=overrides, durations=durations, vertical=ratio)
+        cases += planned_cases(scene, e_recs, ims, names[1:], e_ladder, tail=tail,
+                               vertical=ratio, settings=settings, overrides=overrides)
     executor = executor or ("dask" if scheduler else "process")
     rows = run_cases(cases, store=directory, executor=executor, workers=workers,
                      dask_address=scheduler, progress=progress, retry_errors=retry_errors)
@@ -404,8 +420,11 @@ def run_fragility(scene: str, records: Any, *, engines: Sequence[str] | None = N
         runs["outside"] = _outside_with_vertical(runs, recs, sc, ratio)
     num_info: dict[str, Any] = {}
     if numerical == "measure" and len(names) > 1:
+        given = {e: dict(v) for e, v in (numerical_given or {}).items() if e in names[1:]}
+        todo = [e for e in names[1:] if e not in given]
         num_info = numerical_terms(numerical_evidence(
-            scene, names[1:], settings=settings, overrides=overrides, store=store))
+            scene, todo, settings=settings, overrides=overrides, store=store)) if todo else {}
+        num_info.update(given)
         betas = {e: v["beta"] for e, v in num_info.items()}
     elif numerical == "measure":
         betas = {}

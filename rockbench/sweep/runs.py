@@ -67,6 +67,12 @@ def _base_row(norm: dict[str, Any]) -> dict[str, Any]:
     return row
 
 
+def case_columns(case: Mapping[str, Any]) -> dict[str, Any]:
+    """The columns of a store row that say which case it is: ``case_id``, the flattened case
+    and the case as JSON (what :func:`run_cases` writes beside a run's fields)."""
+    return _base_row(normalize_case(case))
+
+
 def _error_row(norm: dict[str, Any], reason: str) -> dict[str, Any]:
     row = _base_row(norm)
     row.update(status="error", reason=reason, run_s=math.nan, finished_at=_now())

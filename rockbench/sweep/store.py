@@ -270,6 +270,14 @@ def write_row(directory: Path, row: dict[str, Any]) -> Path:
                    lambda tmp: _parquet_safe(pd.DataFrame([row])).to_parquet(tmp, index=False))
 
 
+def write_table(path: str | os.PathLike, df: pd.DataFrame) -> Path:
+    """Write a table of store rows to one Parquet file ``path`` atomically (mixed-type columns
+    made storable as the store's rows are)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return _atomic(path, lambda tmp: _parquet_safe(df).to_parquet(tmp, index=False))
+
+
 def _store_files(directory: Path) -> list[Path]:
     if not directory.is_dir():
         return []
