@@ -176,6 +176,7 @@ def test_the_budget_stops_the_search_and_says_what_to_run_next(fake):
     nxt = d.next_steps[0.02]
     assert nxt["engine"] == "pymunk" and nxt["cpu_s"] > 0 and "rockbench advise" in \
         nxt["command"]
+    assert nxt["value"] == min(v for _, v, _ in calls) / 2     # one finer than the finest run
     assert d.cpu_s <= 3.0 + 1e-9
 
 

@@ -289,8 +289,13 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
     evidence = summarize(runs) if len(runs) else pd.DataFrame()
     rows = outcome_rows(tols, names, states, outcome)
     overhead = max(ledger["spent"] / ledger["runs"], 1.0) if ledger["runs"] > 0 else 1.0
+    finest: dict[str, tuple[float, float]] = {}
+    for lad in ladders:               # the finest rung each engine ran (any contact variant)
+        if lad.rungs and (lad.engine not in finest
+                          or lad.rungs[-1].value < finest[lad.engine][0]):
+            finest[lad.engine] = (lad.rungs[-1].value, lad.rungs[-1].cost)
     nexts = {t: next_step(t, rows, knobs, scene_arg or scene.name, sim_choice + sim_held,
-                           size, float(vertical), overhead)
+                           size, float(vertical), overhead, finest)
              for t in tols}
     return Decision(scene=scene.name, size=size, tolerances=tols, outcomes=rows,
                     evidence=evidence, runs=runs, cases=vset, coverage=coverage(vset),

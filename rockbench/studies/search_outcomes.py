@@ -118,12 +118,15 @@ def tie_order(meets: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def next_step(t, rows, knobs, scene_arg: str, sim_total: float, size: str,
-               vertical: float = 0.0, overhead: float = 1.0) -> dict[str, Any] | None:
-    """When nothing meets ``t``: what to run next - the next finer setting of the engine
-    whose next step is the cheapest among those that came within ``t`` on the choice part
-    (else of the one that came closest) - and an estimate of what running it (choice and
-    held-out) costs [CPU s]: its rung's cost scaled by the step ratio, times the search's
-    measured overhead around its runs (builds, warm-ups, pools)."""
+               vertical: float = 0.0, overhead: float = 1.0,
+               finest: dict[str, tuple[float, float]] | None = None
+               ) -> dict[str, Any] | None:
+    """When nothing meets ``t``: what to run next - the setting one finer than the finest
+    each engine ran (``finest``: engine -> (value, CPU s per simulated s); else the value of
+    its outcome row), of the engine whose next step is the cheapest among those that came
+    within ``t`` on the choice part (else of the one that came closest) - and an estimate of
+    what running it (choice and held-out) costs [CPU s]: that rung's cost scaled by the step
+    ratio, times the search's measured overhead around its runs (builds, warm-ups, pools)."""
     g = rows[np.isclose(rows["tolerance"].astype(float), t)]
     if (g["status"] == "meets").any():
         return None
@@ -132,10 +135,12 @@ def next_step(t, rows, knobs, scene_arg: str, sim_total: float, size: str,
     steps = []
     for _, r in cand.iterrows():
         knob = knobs.get(r["engine"], "dt")
-        v = finer(knob, float(r["value"]))
+        last, cost = (finest or {}).get(r["engine"],
+                                        (float(r["value"]), float(r["cpu_per_sim_s"])))
+        v = finer(knob, last)
         if v is None:
             continue
-        per = float(r["cpu_per_sim_s"]) * ((float(r["value"]) / v) if knob == "dt" else 1.0)
+        per = cost * ((last / v) if knob == "dt" else 1.0)
         steps.append((float(r["worst_error_choice"]) > t,
                       per if math.isfinite(per) else math.inf,
                       float(r["worst_error_choice"]), r["engine"], knob, v, per))
