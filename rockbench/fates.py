@@ -17,6 +17,8 @@ FATES: dict[str, str] = {
     "not converged": "within the tolerance at some setting, but not at two in a row (a lucky "
                      "or erratic step, or only at the finest one run)",
     "dearer": "not searched further: its next setting would cost more than a confirmed one",
+    "budget ended": "not searched further: the search's CPU budget ended before its next "
+                    "setting (what to run next, with its estimated cost, says how to go on)",
     "not reached": "beyond the tolerance at every setting run",
     "diverged": "no setting ran ok on the evidence",
     "not installed": "its engine does not import here",

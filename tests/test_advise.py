@@ -172,7 +172,7 @@ def test_the_budget_stops_the_search_and_says_what_to_run_next(fake):
                  executor="serial", budget_cpu_s=3.0)
     assert d.stopped.startswith("CPU budget")
     r = d.at(0.02).iloc[0]
-    assert r["status"] == "not reached" and "budget" in r["reason"]
+    assert r["status"] == "budget ended" and "budget" in r["reason"]
     nxt = d.next_steps[0.02]
     assert nxt["engine"] == "pymunk" and nxt["cpu_s"] > 0 and "rockbench advise" in \
         nxt["command"]

@@ -101,7 +101,8 @@ def decision_sentences(advice: pd.DataFrame, scene: str, *,
                     f"{r['engine']} at {r['setting']}" for _, r in ties.iterrows()))
             out.append(text + ".")
             continue
-        almost = g[st.isin(ALMOST)]
+        err = pd.to_numeric(g["worst_error_choice"], errors="coerce")
+        almost = g[st.isin(ALMOST) | ((st == "budget ended") & (err <= tol))]
         if len(almost):
             parts = []
             for _, r in almost.iterrows():
@@ -109,6 +110,10 @@ def decision_sentences(advice: pd.DataFrame, scene: str, *,
                     parts.append(f"{r['engine']} reaches it at {r['setting']} on the chosen "
                                  f"cases ({pct(r['worst_error_choice'])}) but misses it on "
                                  f"the held-out ones ({pct(r['worst_error_heldout'])})")
+                elif r["status"] == "budget ended":
+                    parts.append(f"{r['engine']} reaches it ({pct(r['worst_error_choice'])} "
+                                 f"at {r['setting']}) but the search's CPU budget ended before "
+                                 "a finer setting could confirm it")
                 else:
                     parts.append(f"{r['engine']} reaches it ({pct(r['worst_error_choice'])} "
                                  f"at {r['setting']}) but is not confirmed: "

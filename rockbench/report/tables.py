@@ -11,6 +11,7 @@ from typing import Any
 
 import pandas as pd
 
+from ..fates import FATES
 from . import figures as F
 
 __all__ = ["CAMPAIGN_COLUMNS", "metrics_table", "eta_tables",
@@ -111,8 +112,7 @@ CAMPAIGN_COLUMNS: dict[str, dict[str, str]] = {
     "advice.csv": {
         "tolerance": "-, relative error (0.02 = 2 %)", "rank": "-, 1 = recommended when it "
         "meets the tolerance", "engine": "-",
-        "status": "-, the engine's fate (rockbench.fates: meets, fails held-out, not "
-                  "converged, dearer, not reached, diverged, not installed, left out)",
+        "status": f"-, the engine's fate (rockbench.fates: {', '.join(FATES)})",
         "recommended": "-, bool", "setting": "-, the setting (meets: the answer; otherwise the "
         "closest one)", "worst_error_choice": "-, worst error on the choice part",
         "worst_error_heldout": "-, worst error on the held-out part",

@@ -492,6 +492,8 @@ class _Ladder:
                           self.dearer.get(t))
                 if self.stop and t in self.open():
                     o["reason"] = f"{o['reason']}; {self.stop}"
+                    if o["status"] in ("not converged", "not reached"):
+                        o["status"] = "budget ended"      # the search, not the engine
             if self.variant:
                 o["reason"] = f"{o['reason']} (contact settings: " + ", ".join(
                     f"{k}={v}" for k, v in sorted(self.variant.items())) + ")"

@@ -130,7 +130,8 @@ def next_step(t, rows, knobs, scene_arg: str, sim_total: float, size: str,
     g = rows[np.isclose(rows["tolerance"].astype(float), t)]
     if (g["status"] == "meets").any():
         return None
-    cand = g[g["status"].isin(["fails held-out", "not converged", "not reached", "dearer"])]
+    cand = g[g["status"].isin(["fails held-out", "not converged", "not reached", "dearer",
+                               "budget ended"])]
     cand = cand[np.isfinite(cand["worst_error_choice"].astype(float))]
     steps = []
     for _, r in cand.iterrows():
