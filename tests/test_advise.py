@@ -269,7 +269,8 @@ def test_coverage_says_when_the_held_out_part_is_thin():
 # =========================================================================================
 # Real runs
 # =========================================================================================
-def test_cli_advise_on_a_user_scene_file_decides_every_tolerance(tmp_path, capsys):
+def test_cli_advise_on_a_user_scene_file_decides_every_tolerance(tmp_path, capsys,
+                                                                 monkeypatch):
     """`rockbench advise FILE --quick --json` on a user's block (1 x 4 m): pymunk is confirmed at
     every tolerance of the ladder (its worst errors are >= 2x inside even the tightest, 0.5 %,
     at its finer steps); the JSON's fields agree with each other (the recommended setting is a
@@ -278,6 +279,7 @@ def test_cli_advise_on_a_user_scene_file_decides_every_tolerance(tmp_path, capsy
     makes a rerun free."""
     from rockbench.cli.main import main
 
+    monkeypatch.setenv("ROCKBENCH_SEARCH_BUDGET", "none")     # not the machine's load
     f = tmp_path / "my-block.toml"
     f.write_text('name = "my-block"\n[structure]\ntype = "block"\nwidth = 1.0\nheight = 4.0\n')
     store = str(tmp_path / "store")
@@ -358,3 +360,15 @@ def test_a_rung_that_may_be_confirmed_is_budgeted_with_its_held_out_part(fake, m
                  executor="serial", budget_cpu_s=0.25 + 0.75)
     assert d.stopped.startswith("CPU budget")
     assert ("pymunk", 2e-3, "choice") not in calls
+
+
+def test_the_default_budget_can_be_set_for_every_search(monkeypatch):
+    monkeypatch.setenv("ROCKBENCH_SEARCH_BUDGET", "none")
+    assert S._auto_budget("quick") is None
+    monkeypatch.setenv("ROCKBENCH_SEARCH_BUDGET", "90")
+    assert S._auto_budget("default") == 90.0
+    monkeypatch.setenv("ROCKBENCH_SEARCH_BUDGET", "-1")
+    with pytest.raises(rb.ParameterError, match="ROCKBENCH_SEARCH_BUDGET"):
+        S._auto_budget("quick")
+    monkeypatch.delenv("ROCKBENCH_SEARCH_BUDGET")
+    assert S._auto_budget("quick") == S.BUDGETS["quick"]

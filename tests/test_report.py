@@ -235,13 +235,20 @@ def test_find_records(tmp_path):
 # ------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
+    """The quick campaign, its search without a CPU budget (ROCKBENCH_SEARCH_BUDGET=none,
+    inherited by the lane processes): what the page says must not depend on the load."""
     _need_pymunk()
     pytest.importorskip("pyarrow")
     out = tmp_path_factory.mktemp("campaign")
     recs = tmp_path_factory.mktemp("records")
     _write_record_folder(recs)
-    path = run_campaign(out, engines=["pymunk"], quick=True, progress=False,
-                        records_dir=recs)
+    mp = pytest.MonkeyPatch()
+    mp.setenv("ROCKBENCH_SEARCH_BUDGET", "none")
+    try:
+        path = run_campaign(out, engines=["pymunk"], quick=True, progress=False,
+                            records_dir=recs)
+    finally:
+        mp.undo()
     return path, path.read_text(encoding="utf-8")
 
 

@@ -193,10 +193,11 @@ def fragility_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
 
 
 def measures_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
-    """One row per intensity measure (``analysis["measures"]``), per backend its dispersion
-    [-] with its rank (1: the most efficient), the share [%] of resampled ensembles of records
-    in which its family is the most efficient, and its median [the measure's unit]; the
-    analytic model on its whole ladder (``measures_full``) last. Empty without the table."""
+    """One row per backend (the analytic model on its whole ladder, ``measures_full``, last),
+    one column per intensity measure: its dispersion beta_RR [-] with its rank (1: the most
+    efficient) and the share [%] of resampled ensembles of records in which its family is the
+    most efficient (the medians are in the exports' ``measures.csv``). Empty without the
+    table."""
     m = analysis.get("measures")
     if not m:
         return pd.DataFrame()
@@ -206,16 +207,16 @@ def measures_table(analysis: Mapping[str, Any]) -> pd.DataFrame:
     if ref in full:
         cols.append((f"{ref} (whole ladder)", full[ref]))
     rows = []
-    for k, d in m["measures"].items():
-        row = {"intensity measure": d["name"], "unit": d["unit"]}
-        for b, v in cols:
+    for b, v in cols:
+        row: dict[str, Any] = {"backend": b}
+        for k, d in m["measures"].items():
             f = v["fits"][k]
-            row[f"{b}: dispersion [-] (rank)"] = (f"{f['dispersion']:.3f} ({f['rank']})"
-                                                 if f["rank"] is not None else "no fit")
             share = (v.get("p_best") or {}).get(f.get("family", k))
-            row[f"{b}: most efficient in [%] of resamples"] = (
-                100.0 * share if share is not None else math.nan)
-            row[f"{b}: median [unit]"] = f["median"]
+            cell = (f"{f['dispersion']:.3f} ({f['rank']})" if f["rank"] is not None
+                    else "no fit")
+            if share is not None:
+                cell += f", {100.0 * share:.0f} %"
+            row[d["name"]] = cell
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -287,8 +288,11 @@ def fragility_html(section: Mapping[str, Any], figdir=None) -> str:
                 "against each; the smaller, the less record-to-record spread is left), on the "
                 "runs the engines and the analytic model both made"
                 + (f"; Sa at T_p = 2 pi / p = {st['sa_period']:.3g} s" if st else "")
-                + ". A dimensionless measure has its dimensional one's dispersion for one "
-                  "frame (they rank together).</p>")
+                + ". Each cell: beta_RR [-], its rank (1: the most efficient), and the "
+                  "share [%] of resampled ensembles of records in which it is the most "
+                  "efficient (the medians: measures.csv of the exports). A dimensionless "
+                  "measure has its dimensional one's dispersion for one frame (they rank "
+                  "together).</p>")
             parts.append(H.html_table(mt, graded=False, scroll=True))
             sent = [v["sentence"] for v in a["measures"]["backends"].values() if "sentence" in v]
             if sent:

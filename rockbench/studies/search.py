@@ -219,7 +219,7 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
     tols = tuple(sorted({_check_tolerance(t) for t in tolerances}, reverse=True))
     if not tols:
         raise ParameterError("tolerances", tolerances, "at least one relative error in (0, 1)")
-    budget = BUDGETS[size] if budget_cpu_s == "auto" else budget_cpu_s
+    budget = _auto_budget(size) if budget_cpu_s == "auto" else budget_cpu_s
     if budget is not None and not (isinstance(budget, (int, float)) and budget > 0):
         raise ParameterError("budget_cpu_s", budget_cpu_s, "> 0 CPU seconds, 'auto' or None")
     scene_arg = str(scene) if isinstance(scene, (str, Path)) else None
@@ -302,6 +302,26 @@ def search(scene, tolerances: Iterable[float] = TOLERANCE_LADDER,
                     next_steps=nexts, engines=states, cpu_s=ledger["spent"], stopped=stopped,
                     knobs=knobs, machine=machine_info(), contact=pd.DataFrame(contact_rows),
                     vertical=float(vertical), runs_cpu_s=ledger["runs"])
+
+
+def _auto_budget(size: str) -> float | None:
+    """The default budget of an evidence size: :data:`BUDGETS`, or every size's the
+    environment variable ``ROCKBENCH_SEARCH_BUDGET`` gives (CPU seconds, or ``none``: no
+    limit; e.g. a test suite whose answer must not depend on the machine's load)."""
+    import os
+
+    env = os.environ.get("ROCKBENCH_SEARCH_BUDGET", "").strip().lower()
+    if not env:
+        return BUDGETS[size]
+    if env == "none":
+        return None
+    try:
+        value = float(env)
+    except ValueError:
+        value = math.nan
+    if not value > 0:
+        raise ParameterError("ROCKBENCH_SEARCH_BUDGET", env, "> 0 CPU seconds or 'none'")
+    return value
 
 
 def _label(engine: str, knob: str, value: float, variant: Mapping[str, Any]) -> str:
