@@ -372,3 +372,16 @@ def test_the_default_budget_can_be_set_for_every_search(monkeypatch):
         S._auto_budget("quick")
     monkeypatch.delenv("ROCKBENCH_SEARCH_BUDGET")
     assert S._auto_budget("quick") == S.BUDGETS["quick"]
+
+
+def test_the_docs_state_the_budgets_the_code_has():
+    """docs/choosing.md gives the default budgets by value: they are the constants'."""
+    from pathlib import Path
+
+    from rockbench.constants import BUDGETS
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "choosing.md").read_text()
+    assert (f"`rockbench.studies.search.BUDGETS`: {BUDGETS['quick']:g} CPU s for the quick "
+            "evidence") in " ".join(text.split())
+    assert f"{BUDGETS['default']:g} for the default, none for the full" in " ".join(text.split())
+    assert BUDGETS["full"] is None

@@ -129,13 +129,12 @@ def _pick(steps: np.ndarray, p: np.ndarray, k: int | None) -> np.ndarray:
     return np.sort(steps[chosen])
 
 
-def _slow_cases(scene: str, recs, ims, median_pga: float, engine: str,
-                cfg: Mapping[str, Any], opts: dict, ratio: float) -> list[dict[str, Any]]:
-    """One engine's cases on ``scene`` at the cells of the size ``cfg`` (its ladder found as
-    the section finds it: the analytic runs it needs are kept in the store)."""
+def _slow_cases(scene: str, recs, ims, e_ladder, engine: str,
+                cfg: Mapping[str, Any], ratio: float) -> list[dict[str, Any]]:
+    """One engine's cases on ``scene`` at the engines' steps ``e_ladder`` of the size ``cfg``
+    (:func:`_ladder`)."""
     from ..studies.fragility import planned_cases
 
-    _, e_ladder = _ladder(scene, recs, median_pga, cfg, opts)
     e_recs = recs[:cfg["engine_records"]] if cfg["engine_records"] else recs
     return planned_cases(scene, e_recs, ims, [engine], e_ladder, tail=cfg["tail"],
                          vertical=ratio)
@@ -158,8 +157,9 @@ def _measure_slow(frames: Mapping[str, str], slow: Sequence[str], recs, median_p
         run["dask_address"] = opts["scheduler"]
     for scene in frames.values():
         ims = record_ims(recs, Structure.of(load_scene(scene)))
+        _, e_ladder = _ladder(scene, recs, median_pga, cfg, opts)
         for eng in slow:
-            cases = _slow_cases(scene, recs, ims, median_pga, eng, cfg, opts, ratio)
+            cases = _slow_cases(scene, recs, ims, e_ladder, eng, cfg, ratio)
             num = numerical_terms(numerical_evidence(scene, [eng], store=store)).get(eng)
             measure_runs(measured, scene_label(scene), eng, cases, num, **run)
 
@@ -231,11 +231,10 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
                 for eng in slow:
                     why = "no folder of measured runs"
                     if measured is not None:
-                        cases = _slow_cases(scene, recs, ims, median_pga, eng, cfg, opts,
-                                            ratio)
+                        cases = _slow_cases(scene, recs, ims, e_ladder, eng, cfg, ratio)
                         num, why = reuse_runs(measured, scene_label(scene), eng, cases,
                                               S.store_path(store, "", keyed=True))
-                        if why.startswith("measured earlier"):
+                        if num is not None:                  # reused
                             frame_engs.append(eng)
                             if num:
                                 given[eng] = num
@@ -273,7 +272,6 @@ def fragility_section(frames: Mapping[str, str], engines: Sequence[str], *,
             f"analytic verdicts are most mixed"
             + ("" if size == "full" else "; the whole ladder for every engine with "
                "rockbench report --full")
-
             + f". Each run ends {cfg['tail']:g} s after the record's strong motion (95 % of "
               "its Arias intensity). The analytic curve drawn is its fit on the whole ladder; "
               "the tests, the difference of the medians and the intensity-measure table "

@@ -117,7 +117,7 @@ def reuse_runs(folder: str | Path, label: str, engine: str, cases: Sequence[Mapp
     """Put the kept runs of ``engine`` on the frame ``label`` into the section's run ``store``
     (the directory :func:`rockbench.sweep.run_cases` reads, under the current case ids) when
     they can be trusted (module docstring). Returns (the engine's numerical term, how they
-    were checked) or (None, why they are not reused)."""
+    were checked; ``{}`` when none was kept) or (None, why they are not reused)."""
     from ..studies.maps import VERIFY_RTOL
     from ..sweep.runs import case_columns, run_case
     from ..sweep.store import load_store, write_row
@@ -161,7 +161,7 @@ def reuse_runs(folder: str | Path, label: str, engine: str, cases: Sequence[Mapp
         row.update(case_columns(c))
         if row["case_id"] not in there:
             write_row(store, row)
-    num = info.get("numerical") or None
+    num = dict(info.get("numerical") or {})
     return num, (f"measured earlier ({len(keys)} runs, {version}, on "
                  f"{info.get('machine', {}).get('processor', '?')}), one re-run now "
                  f"reproduced (max |phi|/alpha within {VERIFY_RTOL:g})")

@@ -144,18 +144,6 @@ def _cost(rows: pd.DataFrame) -> float:
     return float(cpu[ok].sum() / sim[ok].sum()) if ok.any() and sim[ok].sum() > 0 else math.nan
 
 
-def _spent(rows: pd.DataFrame) -> float:
-    """The CPU seconds some runs took (every repeat, the model build and warm-up included)."""
-    total = 0.0
-    for _, r in rows.iterrows():
-        c = r.get("_cpu")
-        total += float(np.sum(c)) if isinstance(c, np.ndarray) and c.size else 0.0
-        for k in ("build_cpu_s", "warmup_cpu_s"):
-            v = r.get(k)
-            total += float(v) if v is not None and np.isfinite(v) else 0.0
-    return total
-
-
 def coverage(cases: Sequence[Any]) -> dict[str, Any]:
     """What the held-out part of an evidence holds: ``held_out`` cases, ``counted`` (not near
     the boundary), ``overturning``, ``near_boundary`` (reported, not counted), ``records``,
