@@ -302,7 +302,7 @@ def _motion_arrays(mot) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.nda
 
 def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = None,
                       phi0: float = 0.0, phidot0: float = 0.0, settings=None,
-                      reference: Reference | None = None) -> Result:
+                      reference: Reference | None = None, assess_validity: bool = True) -> Result:
     """Run the analytic SDOF model of ``scene`` under ``motion`` with the compiled kernel.
 
     Same signature, arguments and :class:`rockbench.result.Result` schema as
@@ -311,6 +311,9 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
     be "DOP853" (the scheme compiled here), "compiled" or "auto"). ``motion`` may be a
     RickerPulse, a Record or None (free rocking). ``cost.wall_s`` counts the compiled integration only;
     ``cost.steps`` counts accepted steps and ``cost.rhs_calls`` evaluations of phi''.
+    ``assess_validity=False`` leaves the summary's ``validity`` None ("not assessed") and its
+    sliding fields empty: the friction demand at every output step is about 40 % of a run's
+    cost, which a caller reading only verdicts and peaks (the sensitivity band) does not need.
     """
     _require_numba()
     from .solver import AnalyticSettings
@@ -399,9 +402,10 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
         n_impacts=int(out[_O_NIMP]), fractured=bool(out[_O_FRAC]),
         t_fracture=float(out[_O_TFRAC]) if out[_O_FRAC] else None,
         status="ok" if status == 0 else "invalid", reason=reason)
-    from .solver import finish_validity
-    finish_validity(summary, ref, motion, history,
-                    t_lift if t_lift is not None and t_fin >= t_lift else None)
+    if assess_validity:
+        from .solver import finish_validity
+        finish_validity(summary, ref, motion, history,
+                        t_lift if t_lift is not None and t_fin >= t_lift else None)
     cost = Cost(wall_s=wall, sim_time=t_fin - t0, steps=int(out[_O_STEPS]),
                 rhs_calls=int(out[_O_NFEV]))
     sdict = asdict(settings)

@@ -125,8 +125,9 @@ def perturbed_case(scene: Scene, motion, p: Perturbation) -> tuple[Scene, Any, f
 def _simulate(scene: Scene, motion, *, duration: float | None, phi0: float,
               eta_factor: float = 1.0, compiled: bool = True) -> Result:
     """One analytic run (history "minimal", ``AnalyticSettings.eta_factor``): the compiled
-    path (which applies ``eta_factor`` as the plain solver does) when numba is importable and
-    ``compiled``, the plain solver otherwise."""
+    path (which applies ``eta_factor`` as the plain solver does; the run's validity is not
+    assessed: a band reads verdicts and peaks) when numba is importable and ``compiled``, the
+    plain solver otherwise."""
     from ..analytic import solver
 
     settings = solver.AnalyticSettings(history="minimal", eta_factor=eta_factor)
@@ -135,7 +136,7 @@ def _simulate(scene: Scene, motion, *, duration: float | None, phi0: float,
             from ..analytic.compiled import NUMBA_AVAILABLE, simulate_compiled
             if NUMBA_AVAILABLE:
                 return simulate_compiled(scene, motion, duration=duration, phi0=phi0,
-                                         settings=settings)
+                                         settings=settings, assess_validity=False)
         except ImportError:
             pass
     return solver.simulate(scene, motion, duration=duration, phi0=phi0, settings=settings,

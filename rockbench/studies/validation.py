@@ -222,14 +222,42 @@ def _fall(scene) -> float:
 @functools.lru_cache(maxsize=512)
 def _threshold(key: str, W: float, shape: str, sign: int, rtol: float,
                vertical: float = 0.0) -> float:
+    from ..analytic.compiled import run_pulse_grid
+    from ..analytic.reference import reference_of
+    from ..verdict import fall_under_way, finish_fall
+
     scene = _scene_from_key(key)
     sc = scene.replace(fall_angle=_fall(scene))
+    # the run's length, and whether it ends after the pulse, do not depend on A
+    p1 = _pulse(sc, 1.0, W, shape, sign, vertical)
+    dur = run_length(p1, _OVER_TAIL, window="strong")
+    over = dur >= float(p1.t_end) - float(p1.t_start)
+
+    critical = reference_of(sc).critical
 
     def overturns(A: float) -> bool:
-        p = _pulse(sc, A, W, shape, sign, vertical)
-        return bool(_analytic(sc, p, run_length(p, _OVER_TAIL, window="strong"),
-                              compiled=True).summary.overturned)
+        # the compiled model's verdict alone (the kernel of every analytic run, without the
+        # history, events and friction demand a Result carries: 4/5 of a run's cost here,
+        # benchmarks/results/evidence_labels.md), a fall under way at the end finished as the
+        # analytic backend finishes it (rockbench.verdict)
+        def row(extra: float = 0.0):
+            return run_pulse_grid(sc, [(shape, sign, A, W)], duration=dur + extra,
+                                  vertical_ratio=vertical).iloc[0]
 
+        r = row()
+        (r,), _ = finish_fall(
+            [r], [fall_under_way(r["status"], r["overturned"], r["phi_end"], r["intact_end"],
+                                 critical, motion_over=over)],
+            lambda _, extension: [row(extension)], fell=lambda x: bool(x["overturned"]))
+        return bool(r["overturned"])
+
+    return bisect_threshold(overturns, rtol)
+
+
+def bisect_threshold(overturns, rtol: float) -> float:
+    """The smallest A [-] for which ``overturns(A)`` holds, by scanning up from A = 1 by
+    factors of 1.5 and bisecting the first bracket to a relative width ``rtol`` (inf when
+    nothing up to A = 30 overturns)."""
     lo, hi = 1.0, 1.5
     while not overturns(hi):
         lo, hi = hi, hi * 1.5
@@ -250,7 +278,8 @@ def overturn_threshold(scene, W: float, shape: str = "symmetric", sign: int = 1,
     ``shape``, ``sign``) that overturns ``scene`` in the analytic model (fall angle
     min(4 alpha, the scene's), run to 8 s after the pulse's strong part), found by scanning A up
     from 1 by factors of 1.5 and bisecting the first bracket to a relative width ``rtol`` (inf
-    when nothing up to A = 30 overturns it). ``vertical``: r, the pulse's vertical part
+    when nothing up to A = 30 overturns it), each verdict by the analytic maps' kernel
+    (:func:`rockbench.analytic.compiled.run_pulse_grid`). ``vertical``: r, the pulse's vertical part
     a_v = r u_g'' (in phase). Cached in memory per scene data."""
     return _threshold(_scene_key(scene), float(W), str(shape), int(sign), float(rtol),
                       float(vertical))
@@ -268,7 +297,7 @@ def uplift_threshold(scene) -> float:
 def _free_duration(scene, phi0: float) -> float:
     """End of a free-rocking run [s]: between the peak after the third impact and the fourth
     impact of the analytic run, so that every impact is bracketed by complete excursions."""
-    r = _analytic(scene, None, 20.0, phi0)
+    r = _analytic(scene, None, 20.0, phi0, compiled=True)
     t = r.impacts()["t"].to_numpy(dtype=float)
     if t.size >= 4:
         return float(t[2] + 0.75 * (t[3] - t[2]))

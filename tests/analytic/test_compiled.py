@@ -591,3 +591,17 @@ def test_same_argument_checks_as_reference():
         simulate_compiled(ASYM, None)
     with pytest.raises(ValueError, match="motion"):
         simulate_compiled(ASYM, pd.DataFrame())
+
+
+def test_a_run_without_its_validity_is_the_same_run():
+    """``assess_validity=False`` skips the friction demand only: the same verdict, peak, impacts
+    and history; the validity not assessed (None), where the assessed run says it."""
+    scene = load_scene("paper-asymmetric")
+    pulse = RickerPulse.dimensionless(A=6.0, W=3.0, structure=scene.structure)
+    full = simulate_compiled(scene, pulse, duration=6.0)
+    bare = simulate_compiled(scene, pulse, duration=6.0, assess_validity=False)
+    for k in ("max_abs_phi", "overturned", "n_impacts", "uplifted", "status"):
+        assert getattr(bare.summary, k) == getattr(full.summary, k), k
+    pd.testing.assert_frame_equal(bare.history, full.history)
+    assert full.summary.validity is not None and bare.summary.validity is None
+    assert bare.summary.sliding_onset is None
