@@ -129,7 +129,9 @@ def _probe(page: Path, tmp: Path, size: tuple[int, int] = VIEWPORTS[0]) -> tuple
     html = page.read_text(encoding="utf-8")
     html = html.replace("<head>", "<head>\n" + _HEAD_PROBE, 1)
     html = html.replace("</body>", _BODY_PROBE + "\n</body>", 1)
-    probe = page.parent / "_browser_probe.html"
+    # beside the page (its figures are relative links), named per window and process: the
+    # two windows' tests run at once under xdist and must not remove each other's probe
+    probe = page.parent / f"_browser_probe-{size[0]}x{size[1]}-{os.getpid()}.html"
     probe.write_text(html, encoding="utf-8")
     try:
         res = _run_chromium(tmp, "--virtual-time-budget=10000",

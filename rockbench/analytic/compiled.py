@@ -312,8 +312,9 @@ def simulate_compiled(scene: Scene, motion=None, *, duration: float | None = Non
     RickerPulse, a Record or None (free rocking). ``cost.wall_s`` counts the compiled integration only;
     ``cost.steps`` counts accepted steps and ``cost.rhs_calls`` evaluations of phi''.
     ``assess_validity=False`` leaves the summary's ``validity`` None ("not assessed") and its
-    sliding fields empty: the friction demand at every output step is about 40 % of a run's
-    cost, which a caller reading only verdicts and peaks (the sensitivity band) does not need.
+    sliding fields empty: the friction demand at every output step costs 0.7-4 x the
+    integration (benchmarks/results/evidence_labels.md), which a caller reading only verdicts
+    and peaks (the sensitivity band) does not need.
     """
     _require_numba()
     from .solver import AnalyticSettings

@@ -237,7 +237,7 @@ def _threshold(key: str, W: float, shape: str, sign: int, rtol: float,
 
     def overturns(A: float) -> bool:
         # the compiled model's verdict alone (the kernel of every analytic run, without the
-        # history, events and friction demand a Result carries: 4/5 of a run's cost here,
+        # history, events and friction demand a Result carries: most of a run's cost here,
         # benchmarks/results/evidence_labels.md), a fall under way at the end finished as the
         # analytic backend finishes it (rockbench.verdict)
         def row(extra: float = 0.0):
